@@ -1,0 +1,52 @@
+#!/usr/bin/python3
+"""Counts test cases in every JUnit XML file below a folder and prints 'N passed, N failed, N skipped'.
+
+Each <testcase> element is counted once, whatever the nesting of <testsuites>/<testsuite> (gtest >= 1.10
+writes both levels, which makes catkin_test_results double count). A file that does not parse counts as
+one failure. Exit status 1 when anything failed or no test ran at all.
+"""
+import os
+import sys
+import xml.etree.ElementTree as ET
+
+
+def classify(case):
+    if case.find("failure") is not None or case.find("error") is not None:
+        return "failed"
+    if case.find("skipped") is not None or case.get("status") in ("notrun", "disabled"):
+        return "skipped"
+    if case.get("status") == "fail":
+        return "failed"
+    return "passed"
+
+
+def main(folder):
+    counts = {"passed": 0, "failed": 0, "skipped": 0}
+    failures = []
+    for root, _, files in os.walk(folder):
+        for name in sorted(files):
+            if not name.endswith(".xml"):
+                continue
+            path = os.path.join(root, name)
+            try:
+                tree = ET.parse(path)
+            except ET.ParseError as error:
+                counts["failed"] += 1
+                failures.append(f"{path}: unreadable result file ({error})")
+                continue
+            for case in tree.getroot().iter("testcase"):
+                kind = classify(case)
+                counts[kind] += 1
+                if kind == "failed":
+                    failures.append(f"{os.path.relpath(path, folder)}: {case.get('classname')}.{case.get('name')}")
+    for line in failures:
+        print(f"FAILED {line}")
+    total = sum(counts.values())
+    if total == 0:
+        print("no test results found")
+    print(f"{counts['passed']} passed, {counts['failed']} failed, {counts['skipped']} skipped")
+    return 1 if counts["failed"] or total == 0 else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1] if len(sys.argv) > 1 else "."))

@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# Builds and tests the catkin workspace whose source space is this repository.
+#   scripts/ws.sh build   catkin build of every package (and its tests) into .ws/
+#   scripts/ws.sh test    build, then run every gtest/ctest/rostest; last line "N passed, N failed, N skipped"
+# Environment: WS_DIR (default <repo>/.ws), JOBS (default: number of cores).
+set -eo pipefail
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+ws="${WS_DIR:-${repo}/.ws}"
+jobs="${JOBS:-$(nproc)}"
+# shellcheck source=ros_env.sh
+source "${repo}/scripts/ros_env.sh"
+
+configure() {
+  mkdir -p "${ws}"
+  # The workspace lives inside the source space: keep catkin from crawling it for packages.
+  touch "${ws}/CATKIN_IGNORE"
+  if [ ! -d "${ws}/.catkin_tools" ]; then
+    (cd "${ws}" && catkin init >/dev/null)
+  fi
+  (cd "${ws}" && catkin config --source-space "${repo}" \
+    --cmake-args -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+    -DCATKIN_ENABLE_TESTING=ON -DBUILD_TESTING=ON >/dev/null)
+}
+
+build() {
+  configure
+  cd "${ws}"
+  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --summarize
+  # catkin packages build their gtest/rostest executables only in the `tests` target.
+  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --catkin-make-args tests
+  # One compile_commands.json for clang-tidy and editors.
+  /usr/bin/python3 "${repo}/scripts/merge_compile_commands.py" "${ws}/build" "${repo}/compile_commands.json"
+}
+
+package_build_type() {
+  if grep -q '<build_type>cmake</build_type>' "$1/package.xml"; then echo cmake; else echo catkin; fi
+}
+
+run_tests() {
+  cd "${ws}"
+  # shellcheck disable=SC1091
+  set +u; source "${ws}/devel/setup.bash"; set -u
+  local results="${ws}/test_results"
+  rm -rf "${results}"
+  mkdir -p "${results}"
+  local status=0
+  while read -r name path; do
+    local build_dir="${ws}/build/${name}"
+    [ -d "${build_dir}" ] || { echo "ws: no build folder for ${name}" >&2; status=1; continue; }
+    echo "=== tests of ${name}"
+    if [ "$(package_build_type "${repo}/${path}")" = cmake ]; then
+      # Plain CMake package: its gtest cases are ctest tests; ctest writes JUnit.
+      if [ -f "${build_dir}/CTestTestfile.cmake" ] && grep -q add_test -r "${build_dir}" --include=CTestTestfile.cmake; then
+        (cd "${build_dir}" && ctest --output-on-failure --timeout 600 -j "${jobs}" \
+          --output-junit "${results}/${name}-ctest.xml") || status=1
+      fi
+    else
+      # catkin package: run_tests writes gtest/rostest XML (a crashed test gets a MISSING-result failure).
+      make -C "${build_dir}" run_tests >"${results}/${name}-run_tests.log" 2>&1 || status=1
+      tail -n 40 "${results}/${name}-run_tests.log" | grep -E '^\[ *(OK|FAILED|PASSED|RUN) *\]|FAILURE|ERROR|SUMMARY|Ran ' || true
+      if [ -d "${build_dir}/test_results/${name}" ]; then
+        mkdir -p "${results}/${name}"
+        cp "${build_dir}/test_results/${name}"/*.xml "${results}/${name}/" 2>/dev/null || true
+      fi
+    fi
+  done < <(find "${repo}" -name package.xml -not -path "${ws}/*" | sort | while read -r xml; do
+             dir=$(dirname "${xml}")
+             [ -e "${dir}/CATKIN_IGNORE" ] && continue
+             echo "$(sed -n 's:.*<name>\(.*\)</name>.*:\1:p' "${xml}" | head -n1) ${dir#"${repo}"/}"
+           done)
+  # catkin_test_results checks catkin's own XML; our counter reads every file once (no double counting).
+  catkin_test_results "${results}" >/dev/null 2>&1 || status=1
+  /usr/bin/python3 "${repo}/scripts/count_junit.py" "${results}" || status=1
+  return "${status}"
+}
+
+case "${1:-}" in
+  build) build ;;
+  test)
+    if ! build; then
+      echo "ws: build failed"
+      echo "0 passed, 1 failed"
+      exit 1
+    fi
+    run_tests
+    ;;
+  configure) configure ;;
+  *) echo "usage: $0 build|test|configure" >&2; exit 2 ;;
+esac
