@@ -1,0 +1,68 @@
+#pragma once
+
+// Camera model of the embedded dynamic vision sensor (thesis 6.2.1, eq. 6.1-6.3).
+//
+// Frames and units: a point in the camera frame has x to the right, y down and z along the
+// optical axis (metres). Pixel coordinates are continuous with the centre of pixel (x, y) at
+// (x, y) (OpenCV convention), so an event's integer coordinates can be used directly and the
+// sensor spans [-0.5, width - 0.5) x [-0.5, height - 0.5). The principal point of a centred
+// 128 x 128 sensor is therefore (63.5, 63.5).
+
+#include <optional>
+
+#include <Eigen/Core>
+
+namespace ebslam {
+
+/// Pinhole projection (eq. 6.1) followed by the two-parameter radial distortion of eq. 6.3:
+///   e_u = c + f (p_x, p_y) / p_z                       (undistorted, eq. 6.1)
+///   e   = c + (e_u - c) (1 + kappa1 r + kappa2 r^2),   r = |e_u - c| [pixels]   (eq. 6.3)
+/// kappa1 < 0 is barrel distortion. Event coordinates are distorted coordinates.
+struct CameraModel {
+  int width = 128;   ///< sensor columns [pixels], S for the eDVS
+  int height = 128;  ///< sensor rows [pixels]
+  /// Focal length [pixels]. Default: the thesis' floor-robot setup (6.5.3) has one pixel
+  /// covering W_trig = D / f = 0.03 m on a ceiling D = 2.59 m away (eq. 6.5), f = 2.59 / 0.03.
+  double focal_px = 2.59 / 0.03;
+  Eigen::Vector2d principal_point{63.5, 63.5};  ///< c [pixels], sensor centre by default
+  double kappa1 = 0.0;  ///< linear radial distortion coefficient [1/pixel] (eq. 6.3)
+  double kappa2 = 0.0;  ///< quadratic radial distortion coefficient [1/pixel^2] (eq. 6.3)
+
+  /// Focal length from the full opening angle alpha_fov [rad] with eq. 6.2 as printed,
+  /// f = S / tan(alpha_fov / 2). (The usual pinhole relation is (S / 2) / tan(alpha_fov / 2);
+  /// the thesis' formula is kept so that thesis parameters reproduce.)
+  /// Throws std::invalid_argument unless 0 < alpha_fov < pi and size > 0.
+  static double focalFromOpeningAngle(double alpha_fov_rad, int sensor_size = 128);
+
+  /// Throws std::invalid_argument with the reason if a parameter is invalid (non-positive size
+  /// or focal length, non-finite values, or a distortion that is not monotonic inside the
+  /// sensor so that it cannot be inverted).
+  void validate() const;
+
+  /// World distance one pixel covers at depth D [m] (eq. 6.5): W_trig = D / f.
+  double triggerDistance(double depth_m) const { return depth_m / focal_px; }
+
+  /// Distorted pixel coordinates of a camera-frame point (eq. 6.1 + 6.3). std::nullopt for
+  /// points at or behind the projection centre (p_z <= 0). The result may lie outside the
+  /// sensor; see isInside().
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_camera) const;
+
+  /// Undistorted -> distorted pixel coordinates (eq. 6.3).
+  Eigen::Vector2d distort(const Eigen::Vector2d& undistorted_px) const;
+  /// Distorted -> undistorted pixel coordinates: inverse of eq. 6.3 by Newton iteration on the
+  /// radius. std::nullopt if the radius is beyond the monotonic range of the distortion.
+  std::optional<Eigen::Vector2d> undistort(const Eigen::Vector2d& distorted_px) const;
+
+  /// Direction of the viewing ray through a (distorted) pixel position in the camera frame,
+  /// scaled to z = 1: ((u - c_x) / f, (v - c_y) / f, 1) after undistortion (eq. 6.32 / f).
+  /// std::nullopt if the pixel cannot be undistorted.
+  std::optional<Eigen::Vector3d> backprojectRay(const Eigen::Vector2d& pixel) const;
+
+  /// True if a continuous pixel position rounds to a pixel of the sensor.
+  bool isInside(const Eigen::Vector2d& pixel) const {
+    return pixel.x() >= -0.5 && pixel.y() >= -0.5 && pixel.x() < width - 0.5 &&
+           pixel.y() < height - 0.5;
+  }
+};
+
+}  // namespace ebslam

@@ -1,0 +1,159 @@
+#pragma once
+
+// Event simulator: a dynamic vision sensor moving through a static world of textured planes
+// (thesis 6.2 and the simulation of 6.5.3).
+//
+// Rendering: at a high internal rate the camera pose is interpolated from the trajectory
+// (linear position, slerp orientation) and every pixel's viewing ray is intersected with the
+// planes; the intensity is a bilinear lookup in the plane's texture, which is pre-filtered with
+// a Gaussian the size of the pixel footprint (optics and pixel area: anti-aliasing), optionally
+// with supersampling. Event model per pixel (log-intensity change detector): an event fires when
+// the log intensity has changed by the pixel's contrast threshold since its last reference
+// level; the reference then moves by one threshold, so a change of several thresholds between
+// two render steps gives several events, their times interpolated linearly between the steps.
+// Thresholds have a per-pixel mismatch, a pixel is blind for a refractory period after an
+// event, and background noise events arrive as a Poisson process. Everything random is seeded.
+//
+// Time: event timestamps are the trajectory's own clock in microseconds, round(t_s * 1e6), so
+// events and the ground-truth trajectory share one clock (the floor-robot trajectories start
+// at t = 0).
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "ebslam/camera_model.h"
+#include "ebslam/event.h"
+#include "ebslam/trajectory.h"
+
+namespace ebslam {
+
+/// A rectangle in the world with an intensity texture.
+///
+/// Plane frame: `pose` maps plane coordinates to world coordinates. The plane is z = 0 in its
+/// frame; texel (col, row) of the texture covers plane coordinates
+/// [col, col + 1) * metres_per_texel in x and [row, row + 1) * metres_per_texel in y, i.e. the
+/// texture's top-left corner is at the plane origin. The plane extends over
+/// [0, size_m.x()] x [0, size_m.y()]; with `repeat` the texture is tiled over that extent,
+/// otherwise the extent is clipped to the texture. Both faces are visible.
+struct TexturedPlane {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< plane -> world
+  Eigen::Vector2d size_m{1.0, 1.0};                        ///< extent of the plane [m]
+  /// Intensity, CV_32FC1 with values in [0, 1] (linear irradiance, arbitrary unit); use
+  /// textureFromImage() to convert a photograph.
+  cv::Mat texture;
+  double metres_per_texel = 0.01;  ///< texel edge length on the plane [m]
+  bool repeat = true;              ///< tile the texture over the extent
+
+  /// Throws std::invalid_argument with the reason if the plane is unusable (empty or wrongly
+  /// typed texture, non-positive sizes, non-finite pose).
+  void validate() const;
+};
+
+/// The static world the sensor looks at.
+struct Scene {
+  std::vector<TexturedPlane> planes;
+  /// Intensity of rays that hit no plane, in the texture's unit.
+  double background_intensity = 0.5;
+};
+
+/// Converts an 8-bit or 16-bit grey or BGR image, or a float image, to the texture format
+/// (CV_32FC1, 8-bit values / 255). Throws std::invalid_argument for an empty image.
+cv::Mat textureFromImage(const cv::Mat& image);
+
+/// Parameters of the per-pixel event generation model.
+struct EventModelConfig {
+  /// Mean ON and OFF contrast threshold C in natural-log intensity units. Not given in the
+  /// thesis; 0.15 (a 16 % brightness change) is a typical DVS128 / eDVS bias setting.
+  double contrast_threshold_on = 0.15;
+  double contrast_threshold_off = 0.15;
+  /// Standard deviation of the per-pixel threshold mismatch [log units]; the DVS128 paper
+  /// (Lichtsteiner et al. 2008) reports about 2.1 % contrast mismatch.
+  double threshold_mismatch_sigma = 0.021;
+  /// Lower bound of any pixel's threshold after mismatch [log units].
+  double min_contrast_threshold = 0.01;
+  /// Dead time after an event [us]; the eDVS' is about 100 us (thesis table 6.2). Crossings
+  /// during it emit no event but still move the reference level.
+  double refractory_period_us = 100.0;
+  /// Background activity per pixel [Hz]; random pixel, polarity and time (Poisson process).
+  double noise_rate_hz_per_pixel = 0.1;
+  /// Added to the intensity before the logarithm (dark current); bounds the log contrast of
+  /// black texels.
+  double log_epsilon = 0.02;
+  /// Start every pixel's reference level at a uniformly random phase inside its threshold band
+  /// (as after an unknown history) instead of at its first intensity.
+  bool randomize_initial_reference = true;
+  std::uint64_t seed = 1;  ///< seeds threshold mismatch, initial references and noise
+
+  /// Throws std::invalid_argument with the reason for out-of-range values.
+  void validate() const;
+};
+
+/// Parameters of rendering and time stepping.
+struct SimulatorConfig {
+  CameraModel camera;
+  EventModelConfig events;
+  /// Minimum render rate [Hz]; steps are subdivided further when the image would move more
+  /// than max_step_motion_px between two renders.
+  double render_rate_hz = 1000.0;
+  /// Largest image motion between two renders [pixels], estimated at the sensor corners and
+  /// centre. Keeps the linear interpolation of event times accurate.
+  double max_step_motion_px = 0.25;
+  /// Standard deviation of the optical point spread [pixels]. The texture is blurred with this
+  /// Gaussian (scaled to the plane at its distance from the first camera pose) combined with
+  /// the pixel's own area (a unit box, variance 1/12 per axis).
+  double blur_sigma_px = 0.3;
+  /// Supersampling: samples per pixel along each axis (1 = one ray through the pixel centre).
+  int supersampling = 1;
+  /// Rate of the ground-truth camera poses written to SimulationResult [Hz].
+  double ground_truth_rate_hz = 200.0;
+
+  void validate() const;
+};
+
+/// Everything a simulation produces.
+struct SimulationResult {
+  EventVector events;             ///< sorted by time, all inside the sensor
+  Trajectory ground_truth;        ///< camera poses (camera -> world) at ground_truth_rate_hz
+  std::size_t signal_events = 0;  ///< events from intensity changes
+  std::size_t noise_events = 0;   ///< background noise events
+  std::size_t render_steps = 0;   ///< number of rendered images
+};
+
+/// Simulates an event camera moving along a trajectory through a scene.
+class EventSimulator {
+ public:
+  /// Throws std::invalid_argument if the configuration is invalid.
+  explicit EventSimulator(const SimulatorConfig& config = {});
+
+  const SimulatorConfig& config() const { return config_; }
+
+  /// Receives the events of one render interval, sorted by time; called in time order.
+  using EventSink = std::function<void(const EventVector& events)>;
+
+  /// Simulates the camera (pose = camera -> world, camera frame as in CameraModel) moving
+  /// along `camera_trajectory` from t_begin_s to t_end_s [s, trajectory clock] and streams the
+  /// events to `sink`. Returns the statistics and the ground truth (result.events stays empty).
+  /// Throws std::invalid_argument for an invalid scene or trajectory (fewer than two poses,
+  /// non-increasing times, non-finite values) or a time range outside the trajectory or empty.
+  SimulationResult simulate(const Scene& scene, const Trajectory& camera_trajectory,
+                            double t_begin_s, double t_end_s, const EventSink& sink) const;
+
+  /// As above, collecting all events in the result.
+  SimulationResult simulate(const Scene& scene, const Trajectory& camera_trajectory,
+                            double t_begin_s, double t_end_s) const;
+
+  /// Renders the intensity image (CV_32FC1, width x height) the sensor sees at `camera_pose`
+  /// (camera -> world); for visualisation and tests.
+  cv::Mat renderIntensity(const Scene& scene, const Eigen::Isometry3d& camera_pose) const;
+
+ private:
+  SimulatorConfig config_;
+};
+
+}  // namespace ebslam
