@@ -1,0 +1,164 @@
+#pragma once
+
+// Event files: the project's binary format, plain text and the Event Camera Dataset text format.
+//
+// Formats (full byte-level description in docs/event_file_format.md):
+//  - kBinary: the project's own format. A 32-byte versioned header (magic "EBSLAMEV", version,
+//    sensor size, CRC-32), then blocks of up to 65536 events. Each block has a 24-byte header
+//    (magic "EVBK", event count, little-endian 64-bit base timestamp in microseconds, CRC-32 of
+//    the records, CRC-32 of the block header) followed by 8-byte records
+//    (int32 time offset from the base [us], uint16 x, uint16 y | polarity << 15). close()
+//    appends a 24-byte end marker (magic "EVND", total event count), so a file cut at a block
+//    boundary, or left by a writer that never closed, is reported as truncated.
+//  - kText: one event per line `t x y p`, '#' comments and blank lines ignored. t is integer
+//    microseconds; a t token with a decimal point or exponent is read as seconds (so
+//    `1.5 3 4 1` is t = 1500000 us). p is 1 (ON) or 0/-1 (OFF). The writer emits the header
+//    comment `# ebslam events text v1 width=W height=H` followed by `t_us x y p` lines; a reader
+//    takes the sensor size from that comment.
+//  - kRpgText: the Event Camera Dataset (Mueggler et al., IJRR 2017) `events.txt`:
+//    `t[s] x y polarity(0/1)` with decimal seconds. The camera is a DAVIS240C, so the sensor
+//    size is 240 x 180 unless given explicitly. The dataset's calib.txt (`fx fy cx cy k1 ...`)
+//    holds no size; when a sibling calib.txt has a principal point outside 240 x 180 the file
+//    is not from that camera and the size becomes the bounding box of the events.
+//
+// Damage: a reader never throws for a damaged file once it is open. It stops at the first
+// truncated or corrupt record (binary: bad block header, CRC mismatch, short block, coordinates
+// outside the declared sensor; text: a line that does not parse, an event outside the sensor)
+// and reports a message naming the byte offset or line in EventReadResult::error. All complete,
+// valid events before the damage are returned. For a block whose records CRC does not match, the
+// whole block is dropped (the damage cannot be localised inside it); a block cut short by the
+// end of the file keeps its complete records.
+//
+// Time order: readers return events in file order and never reorder them. Timestamps that run
+// backwards are not an error; they are counted in EventReadResult::non_monotonic and the index
+// of the first one is reported, so a caller that needs monotonic time can reject the file or
+// call sortEventsByTime(). Writers accept any order (binary blocks store signed offsets).
+
+#include <cstddef>
+#include <cstdint>
+#include <istream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ebslam/event.h"
+
+namespace ebslam {
+
+enum class EventFileFormat { kBinary, kText, kRpgText };
+
+/// Short lower-case name ("binary", "text", "rpg") for messages and command lines.
+const char* toString(EventFileFormat format);
+/// Parses "binary"/"bin"/"ebe", "text"/"txt", "rpg"/"rpg-text"/"ecd"; std::nullopt otherwise.
+std::optional<EventFileFormat> parseEventFileFormat(const std::string& name);
+
+/// Everything read from one event file.
+struct EventReadResult {
+  EventVector events;  ///< every complete, valid event before any damage, in file order
+  SensorSize sensor;   ///< from the file header, the caller, or the format's default
+  std::optional<std::string> error;  ///< set on truncation/corruption: what and where
+  std::size_t non_monotonic = 0;     ///< number of events whose t_us < the previous event's
+  std::optional<std::size_t> first_non_monotonic_index;  ///< index into events of the first one
+};
+
+/// Options for reading; all optional.
+struct EventReadOptions {
+  std::optional<EventFileFormat> format;  ///< detected from magic/extension/content when unset
+  /// Overrides the sensor size of text formats (kText without a header comment, kRpgText).
+  /// For kText without header and without this, the size is the bounding box of the events.
+  /// Ignored for kBinary, whose header is authoritative.
+  std::optional<SensorSize> sensor;
+};
+
+/// Detects the format of an existing file: a file starting with (a prefix of) the binary magic
+/// => kBinary; the kText header comment => kText; else the first data line decides: a
+/// timestamp with a decimal point => kRpgText, an integer timestamp (or no data) => kText.
+/// Throws std::runtime_error if the file cannot be opened.
+EventFileFormat detectEventFileFormat(const std::string& path);
+
+/// Default format for writing a path: ".txt" => kText, anything else => kBinary.
+EventFileFormat eventFileFormatFromExtension(const std::string& path);
+
+/// Reads a whole event file. Throws std::runtime_error if it cannot be opened; damage inside the
+/// file is reported in the result's error instead (see the header comment).
+EventReadResult readEventFile(const std::string& path,
+                              std::optional<EventFileFormat> format = std::nullopt);
+EventReadResult readEventFile(const std::string& path, const EventReadOptions& options);
+
+/// Writes a whole event file. Throws std::runtime_error on I/O failure and
+/// std::invalid_argument for events outside `sensor` or a sensor the format cannot hold
+/// (binary: width <= 65535, height <= 32768).
+void writeEventFile(const std::string& path, const EventVector& events, const SensorSize& sensor,
+                    EventFileFormat format = EventFileFormat::kBinary);
+
+/// Stable sort by timestamp (events with equal time keep their file order).
+void sortEventsByTime(EventVector& events);
+
+/// Streaming reader for large files: reads batches without loading the whole file.
+///
+///   EventFileReader reader(path);
+///   EventVector batch;
+///   while (reader.next(batch, 100000) > 0) { ...; }
+///   if (reader.error()) { ... }
+class EventFileReader {
+ public:
+  /// Opens the file and reads its header. Throws std::runtime_error if it cannot be opened.
+  /// A damaged header does not throw: the reader starts in the done() state with error() set.
+  explicit EventFileReader(const std::string& path, const EventReadOptions& options = {});
+  /// Reads from an already open stream (opened in binary mode), e.g. memory for tests and
+  /// fuzzing. Without options.format the format is detected from the content only.
+  explicit EventFileReader(std::unique_ptr<std::istream> stream,
+                           const EventReadOptions& options = {});
+  ~EventFileReader();
+  EventFileReader(EventFileReader&&) noexcept;
+  EventFileReader& operator=(EventFileReader&&) noexcept;
+  EventFileReader(const EventFileReader&) = delete;
+  EventFileReader& operator=(const EventFileReader&) = delete;
+
+  /// Replaces `batch` with the next up to `max_events` events; returns how many (0 when done).
+  std::size_t next(EventVector& batch, std::size_t max_events);
+
+  EventFileFormat format() const;
+  /// Sensor size. For kText without header and without EventReadOptions::sensor this is the
+  /// bounding box of the events read so far (final once done()).
+  SensorSize sensor() const;
+  bool done() const;  ///< end of file or damage reached
+  const std::optional<std::string>& error() const;
+  std::size_t eventsRead() const;         ///< total events returned so far
+  std::size_t nonMonotonicCount() const;  ///< events so far whose t_us < previous t_us
+  std::optional<std::size_t> firstNonMonotonicIndex() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Streaming writer: append events in as many calls as needed, then close() (the destructor
+/// closes too but swallows errors, so call close() to learn about I/O failures).
+class EventFileWriter {
+ public:
+  /// Creates/truncates the file and writes the header. Throws std::runtime_error if it cannot
+  /// be created and std::invalid_argument for a sensor the format cannot hold.
+  EventFileWriter(const std::string& path, const SensorSize& sensor,
+                  EventFileFormat format = EventFileFormat::kBinary);
+  ~EventFileWriter();
+  EventFileWriter(EventFileWriter&&) noexcept;
+  EventFileWriter& operator=(EventFileWriter&&) noexcept;
+  EventFileWriter(const EventFileWriter&) = delete;
+  EventFileWriter& operator=(const EventFileWriter&) = delete;
+
+  /// Appends events. Throws std::invalid_argument for an event outside the sensor (nothing of
+  /// that call is written then) and std::runtime_error on I/O failure.
+  void write(const EventVector& events);
+  void write(const Event& event);
+  /// Flushes buffered events (binary: ends the current block) and closes the file.
+  /// Throws std::runtime_error on I/O failure. Further writes throw std::logic_error.
+  void close();
+  std::size_t eventsWritten() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ebslam

@@ -1,0 +1,105 @@
+#include "ebslam/trajectory.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace ebslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string tempPath(const std::string& name) {
+  return (fs::temp_directory_path() / ("ebslam_traj_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+TEST(Trajectory, TumRoundTrip) {
+  Trajectory trajectory;
+  for (int i = 0; i < 50; ++i) {
+    StampedPose p;
+    p.t_s = 1311876799.7716 + 0.01 * i;
+    p.position = Eigen::Vector3d(std::sin(0.1 * i), std::cos(0.1 * i), 0.01 * i);
+    p.orientation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.05 * i, Eigen::Vector3d(1, 2, 3).normalized()));
+    trajectory.push_back(p);
+  }
+  const std::string path = tempPath("roundtrip.txt");
+  writeTumTrajectory(path, trajectory);
+  const Trajectory read = readTumTrajectory(path);
+  ASSERT_EQ(read.size(), trajectory.size());
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    EXPECT_NEAR(read[i].t_s, trajectory[i].t_s, 1e-6);
+    EXPECT_LT((read[i].position - trajectory[i].position).norm(), 1e-8);
+    EXPECT_NEAR(std::abs(read[i].orientation.dot(trajectory[i].orientation)), 1.0, 1e-12);
+  }
+  fs::remove(path);
+}
+
+TEST(Trajectory, MalformedLinesNameFileAndLine) {
+  const std::string path = tempPath("bad.txt");
+  const std::string good = "# comment\n1.0 0 0 0 0 0 0 1\n";
+  const std::vector<std::string> bad_lines = {"2.0 nan 0 0 0 0 0 1\n", "2.0 0 0 0 0 0 0\n",
+                                              "2.0 0 0 0 0 0 0 1 9\n", "0.5 0 0 0 0 0 0 1\n",
+                                              "2.0 0 0 0 0 0 0 0\n",   "2.0 0 0 0 0 0 0 2\n",
+                                              "2.0 inf 0 0 0 0 0 1\n", "two 0 0 0 0 0 0 1\n"};
+  for (const std::string& bad : bad_lines) {
+    writeText(path, good + bad);
+    try {
+      readTumTrajectory(path);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ":3:"), std::string::npos) << e.what();
+    }
+  }
+  // Repeated timestamps: kept once by default, an error on request.
+  writeText(path, good + "1.0 5 5 5 0 0 0 1\n2.0 1 1 1 0 0 0 1\n");
+  const Trajectory kept = readTumTrajectory(path);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_EQ(kept[0].position, Eigen::Vector3d::Zero());
+  EXPECT_THROW(readTumTrajectory(path, DuplicateTimestampPolicy::kThrow), std::runtime_error);
+  EXPECT_THROW(readTumTrajectory(tempPath("missing.txt")), std::runtime_error);
+  fs::remove(path);
+}
+
+TEST(Trajectory, InterpolationIsLinearAndSlerp) {
+  Trajectory trajectory(2);
+  trajectory[0].t_s = 10.0;
+  trajectory[0].position = Eigen::Vector3d(0, 0, 0);
+  trajectory[1].t_s = 12.0;
+  trajectory[1].position = Eigen::Vector3d(2, 4, -6);
+  trajectory[1].orientation = Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()));
+  const StampedPose mid = interpolatePose(trajectory, 10.5);
+  EXPECT_LT((mid.position - Eigen::Vector3d(0.5, 1.0, -1.5)).norm(), 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(mid.orientation).angle(), 0.25, 1e-12);
+  const StampedPose end = interpolatePose(trajectory, 12.0);
+  EXPECT_LT((end.position - trajectory[1].position).norm(), 1e-15);
+  // Shortest arc: a sign-flipped quaternion is the same rotation.
+  trajectory[1].orientation.coeffs() *= -1.0;
+  EXPECT_NEAR(Eigen::AngleAxisd(interpolatePose(trajectory, 11.0).orientation).angle(), 0.5, 1e-12);
+  EXPECT_THROW(interpolatePose(trajectory, 9.999), std::out_of_range);
+  EXPECT_THROW(interpolatePose(trajectory, 12.001), std::out_of_range);
+  EXPECT_THROW(interpolatePose(trajectory, std::nan("")), std::out_of_range);
+  EXPECT_THROW(interpolatePose(Trajectory{}, 0.0), std::invalid_argument);
+}
+
+TEST(Trajectory, ReadsRealTumGroundTruth) {
+  const fs::path file = fs::path(EBSLAM_SHARED_DATA_DIR) / "tum-groundtruth" /
+                        "rgbd_dataset_freiburg2_pioneer_360-groundtruth.txt";
+  if (!fs::is_regular_file(file)) GTEST_SKIP() << "shared data not found at " << file;
+  const Trajectory trajectory = readTumTrajectory(file.string());
+  // 21823 poses in the file, 3 of them repeat the previous timestamp.
+  EXPECT_EQ(trajectory.size(), 21820u);
+  EXPECT_NO_THROW(validateTrajectory(trajectory));
+}
+
+}  // namespace
+}  // namespace ebslam
