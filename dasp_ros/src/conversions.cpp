@@ -1,0 +1,225 @@
+#include "dasp_ros/conversions.h"
+
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+
+namespace dasp_ros {
+namespace enc = sensor_msgs::image_encodings;
+
+namespace {
+
+// Shares the message's data without copying; callers clone what they keep.
+cv::Mat shareImage(const sensor_msgs::Image& image, int expected_type) {
+  if (image.width == 0 || image.height == 0) {
+    throw std::invalid_argument("image message is empty (" + std::to_string(image.width) + "x" +
+                                std::to_string(image.height) + ")");
+  }
+  const std::size_t row_bytes = image.width * CV_ELEM_SIZE(expected_type);
+  if (image.step < row_bytes || image.data.size() < image.step * image.height) {
+    throw std::invalid_argument("image message data (" + std::to_string(image.data.size()) +
+                                " bytes, step " + std::to_string(image.step) + ") too small for " +
+                                std::to_string(image.width) + "x" + std::to_string(image.height) +
+                                " " + image.encoding);
+  }
+  if (image.is_bigendian) {
+    throw std::invalid_argument("big-endian image data is not supported");
+  }
+  return cv::Mat(static_cast<int>(image.height), static_cast<int>(image.width), expected_type,
+                 const_cast<uint8_t*>(image.data.data()), image.step);
+}
+
+sensor_msgs::Image makeImageMsg(const cv::Mat& mat, const std::string& encoding,
+                                const std_msgs::Header& header) {
+  return *cv_bridge::CvImage(header, encoding, mat).toImageMsg();
+}
+
+}  // namespace
+
+dasp::Intrinsics toIntrinsics(const sensor_msgs::CameraInfo& info) {
+  // K = [fx 0 cx; 0 fy cy; 0 0 1]; P = [fx' 0 cx' Tx; 0 fy' cy' Ty; 0 0 1 0].
+  const bool k_set = info.K[0] != 0.0;
+  dasp::Intrinsics intrinsics;
+  intrinsics.fx = static_cast<float>(k_set ? info.K[0] : info.P[0]);
+  intrinsics.fy = static_cast<float>(k_set ? info.K[4] : info.P[5]);
+  intrinsics.cx = static_cast<float>(k_set ? info.K[2] : info.P[2]);
+  intrinsics.cy = static_cast<float>(k_set ? info.K[5] : info.P[6]);
+  for (float value : {intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy}) {
+    if (!std::isfinite(value)) throw std::invalid_argument("camera_info intrinsics are not finite");
+  }
+  if (intrinsics.fx <= 0.0f || intrinsics.fy <= 0.0f) {
+    throw std::invalid_argument(
+        "camera_info focal lengths must be positive (fx = " + std::to_string(intrinsics.fx) +
+        ", fy = " + std::to_string(intrinsics.fy) + ")");
+  }
+  return intrinsics;
+}
+
+sensor_msgs::CameraInfo toCameraInfo(const dasp::Intrinsics& intrinsics, int width, int height,
+                                     const std_msgs::Header& header) {
+  sensor_msgs::CameraInfo info;
+  info.header = header;
+  info.width = static_cast<uint32_t>(width);
+  info.height = static_cast<uint32_t>(height);
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {intrinsics.fx, 0.0, intrinsics.cx, 0.0, intrinsics.fy, intrinsics.cy, 0.0, 0.0, 1.0};
+  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  info.P = {intrinsics.fx, 0.0, intrinsics.cx, 0.0, 0.0, intrinsics.fy,
+            intrinsics.cy, 0.0, 0.0,           0.0, 1.0, 0.0};
+  return info;
+}
+
+cv::Mat toColorMat(const sensor_msgs::Image& image) {
+  cv::Mat bgr;
+  if (image.encoding == enc::BGR8) {
+    bgr = shareImage(image, CV_8UC3).clone();
+  } else if (image.encoding == enc::RGB8) {
+    cv::cvtColor(shareImage(image, CV_8UC3), bgr, cv::COLOR_RGB2BGR);
+  } else if (image.encoding == enc::BGRA8) {
+    cv::cvtColor(shareImage(image, CV_8UC4), bgr, cv::COLOR_BGRA2BGR);
+  } else if (image.encoding == enc::RGBA8) {
+    cv::cvtColor(shareImage(image, CV_8UC4), bgr, cv::COLOR_RGBA2BGR);
+  } else if (image.encoding == enc::MONO8) {
+    cv::cvtColor(shareImage(image, CV_8UC1), bgr, cv::COLOR_GRAY2BGR);
+  } else {
+    throw std::invalid_argument("colour image encoding '" + image.encoding +
+                                "' is not supported (bgr8, rgb8, bgra8, rgba8, mono8)");
+  }
+  return bgr;
+}
+
+cv::Mat toDepthMat(const sensor_msgs::Image& image) {
+  if (image.encoding == enc::TYPE_16UC1 || image.encoding == enc::MONO16) {
+    return shareImage(image, CV_16UC1).clone();
+  }
+  if (image.encoding == enc::TYPE_32FC1) {
+    const cv::Mat metres = shareImage(image, CV_32FC1);
+    cv::Mat millimetres(metres.size(), CV_16UC1);
+    for (int r = 0; r < metres.rows; ++r) {
+      const float* in = metres.ptr<float>(r);
+      uint16_t* out = millimetres.ptr<uint16_t>(r);
+      for (int c = 0; c < metres.cols; ++c) {
+        const float mm = in[c] * 1000.0f;
+        out[c] = (std::isfinite(mm) && mm > 0.0f && mm < 65535.5f)
+                     ? static_cast<uint16_t>(std::lround(mm))
+                     : uint16_t{0};
+      }
+    }
+    return millimetres;
+  }
+  throw std::invalid_argument("depth image encoding '" + image.encoding +
+                              "' is not supported (16UC1/mono16 in mm, 32FC1 in m)");
+}
+
+dasp::RgbdFrame toRgbdFrame(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
+                            const sensor_msgs::CameraInfo& info) {
+  if (color.width != depth.width || color.height != depth.height) {
+    throw std::invalid_argument(
+        "colour (" + std::to_string(color.width) + "x" + std::to_string(color.height) +
+        ") and depth (" + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+        ") images differ in size: the depth image must be registered to the colour image");
+  }
+  dasp::RgbdFrame frame;
+  frame.color = toColorMat(color);
+  frame.depth = toDepthMat(depth);
+  frame.intrinsics = toIntrinsics(info);
+  return frame;
+}
+
+sensor_msgs::Image toColorImageMsg(const cv::Mat& color, const std_msgs::Header& header) {
+  if (color.type() != CV_8UC3) throw std::invalid_argument("colour image must be CV_8UC3 BGR");
+  return makeImageMsg(color, enc::BGR8, header);
+}
+
+sensor_msgs::Image toDepthImageMsg(const cv::Mat& depth_mm, const std_msgs::Header& header) {
+  if (depth_mm.type() != CV_16UC1) throw std::invalid_argument("depth image must be CV_16UC1 mm");
+  return makeImageMsg(depth_mm, enc::TYPE_16UC1, header);
+}
+
+sensor_msgs::Image toLabelImageMsg(const cv::Mat& labels, const std_msgs::Header& header) {
+  if (labels.type() != CV_32SC1) throw std::invalid_argument("label image must be CV_32SC1");
+  return makeImageMsg(labels, enc::TYPE_32SC1, header);
+}
+
+cv::Mat toLabelMat(const sensor_msgs::Image& image) {
+  if (image.encoding != enc::TYPE_32SC1) {
+    throw std::invalid_argument("label image encoding '" + image.encoding + "' is not 32SC1");
+  }
+  return shareImage(image, CV_32SC1).clone();
+}
+
+ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& superpixels,
+                                                  const std_msgs::Header& header) {
+  ebslam_msgs::SuperpixelArray msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(superpixels.labels.cols);
+  msg.height = static_cast<uint32_t>(superpixels.labels.rows);
+  msg.superpixels.reserve(superpixels.superpixels.size());
+  for (const dasp::Superpixel& sp : superpixels.superpixels) {
+    ebslam_msgs::Superpixel out;
+    out.id = static_cast<uint32_t>(sp.id);
+    out.u = sp.u;
+    out.v = sp.v;
+    out.pixel_count = static_cast<uint32_t>(sp.pixel_count);
+    out.color.r = sp.color.x();
+    out.color.g = sp.color.y();
+    out.color.b = sp.color.z();
+    out.color.a = 1.0f;
+    out.position.x = sp.position.x();
+    out.position.y = sp.position.y();
+    out.position.z = sp.position.z();
+    out.normal.x = sp.normal.x();
+    out.normal.y = sp.normal.y();
+    out.normal.z = sp.normal.z();
+    out.radius = sp.radius_m;
+    out.density = sp.density;
+    out.area = sp.area_m2;
+    out.thickness = sp.thickness;
+    out.eccentricity = sp.eccentricity;
+    out.flatness = sp.flatness;
+    msg.superpixels.push_back(out);
+  }
+  return msg;
+}
+
+dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
+                                const sensor_msgs::Image& labels) {
+  if (labels.width != msg.width || labels.height != msg.height) {
+    throw std::invalid_argument("label image size does not match the SuperpixelArray size");
+  }
+  dasp::Superpixels result;
+  result.labels = toLabelMat(labels);
+  result.superpixels.reserve(msg.superpixels.size());
+  for (std::size_t i = 0; i < msg.superpixels.size(); ++i) {
+    const ebslam_msgs::Superpixel& in = msg.superpixels[i];
+    if (in.id != i) {
+      throw std::invalid_argument("superpixel " + std::to_string(i) + " has id " +
+                                  std::to_string(in.id) + ": ids must index the array");
+    }
+    dasp::Superpixel sp;
+    sp.id = static_cast<int>(in.id);
+    sp.u = in.u;
+    sp.v = in.v;
+    sp.pixel_count = static_cast<int>(in.pixel_count);
+    sp.color = {in.color.r, in.color.g, in.color.b};
+    sp.position = {static_cast<float>(in.position.x), static_cast<float>(in.position.y),
+                   static_cast<float>(in.position.z)};
+    sp.normal = {static_cast<float>(in.normal.x), static_cast<float>(in.normal.y),
+                 static_cast<float>(in.normal.z)};
+    sp.radius_m = in.radius;
+    sp.density = in.density;
+    sp.area_m2 = in.area;
+    sp.thickness = in.thickness;
+    sp.eccentricity = in.eccentricity;
+    sp.flatness = in.flatness;
+    result.superpixels.push_back(sp);
+  }
+  return result;
+}
+
+}  // namespace dasp_ros

@@ -1,0 +1,152 @@
+// Round trips of every conversion in conversions.h, and the errors for messages that cannot be
+// represented.
+#include <cv_bridge/cv_bridge.h>
+#include <gtest/gtest.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <opencv2/core.hpp>
+
+#include "dasp_ros/conversions.h"
+
+namespace {
+
+using dasp_ros::toColorImageMsg;
+using dasp_ros::toColorMat;
+
+std_msgs::Header header() {
+  std_msgs::Header h;
+  h.stamp = ros::Time(100, 5);
+  h.frame_id = "camera_rgb_optical_frame";
+  return h;
+}
+
+cv::Mat randomImage(int rows, int cols, int type, double low, double high, int seed) {
+  cv::Mat m(rows, cols, type);
+  cv::RNG rng(seed);
+  rng.fill(m, cv::RNG::UNIFORM, low, high);
+  return m;
+}
+
+bool same(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+}
+
+TEST(Conversions, ColorRoundTrip) {
+  const cv::Mat color = randomImage(7, 11, CV_8UC3, 0, 256, 1);
+  const sensor_msgs::Image msg = toColorImageMsg(color, header());
+  EXPECT_EQ(msg.encoding, "bgr8");
+  EXPECT_EQ(msg.header.frame_id, "camera_rgb_optical_frame");
+  EXPECT_TRUE(same(toColorMat(msg), color));
+}
+
+TEST(Conversions, Rgb8IsSwappedToBgr) {
+  sensor_msgs::Image msg =
+      toColorImageMsg(cv::Mat(2, 2, CV_8UC3, cv::Scalar(10, 20, 30)), header());
+  msg.encoding = "rgb8";  // same bytes read as R=10, G=20, B=30
+  const cv::Mat bgr = toColorMat(msg);
+  EXPECT_EQ(bgr.at<cv::Vec3b>(1, 1), cv::Vec3b(30, 20, 10));
+}
+
+TEST(Conversions, DepthRoundTripAndMetres) {
+  const cv::Mat depth = randomImage(5, 9, CV_16UC1, 0, 5000, 2);
+  EXPECT_TRUE(same(dasp_ros::toDepthMat(dasp_ros::toDepthImageMsg(depth, header())), depth));
+
+  cv::Mat metres(1, 4, CV_32FC1);
+  metres.at<float>(0) = 1.2345f;
+  metres.at<float>(1) = std::nanf("");
+  metres.at<float>(2) = -1.0f;
+  metres.at<float>(3) = 70.0f;  // beyond 16-bit millimetres
+  const sensor_msgs::Image msg = *cv_bridge::CvImage(header(), "32FC1", metres).toImageMsg();
+  const cv::Mat mm = dasp_ros::toDepthMat(msg);
+  EXPECT_EQ(mm.at<uint16_t>(0), 1235);
+  EXPECT_EQ(mm.at<uint16_t>(1), 0);
+  EXPECT_EQ(mm.at<uint16_t>(2), 0);
+  EXPECT_EQ(mm.at<uint16_t>(3), 0);
+}
+
+TEST(Conversions, LabelRoundTrip) {
+  const cv::Mat labels = randomImage(6, 4, CV_32SC1, -1, 1000, 3);
+  EXPECT_TRUE(same(dasp_ros::toLabelMat(dasp_ros::toLabelImageMsg(labels, header())), labels));
+}
+
+TEST(Conversions, CameraInfoRoundTrip) {
+  const dasp::Intrinsics in{525.0f, 526.0f, 319.5f, 239.5f};
+  const sensor_msgs::CameraInfo info = dasp_ros::toCameraInfo(in, 640, 480, header());
+  EXPECT_EQ(info.width, 640u);
+  const dasp::Intrinsics out = dasp_ros::toIntrinsics(info);
+  EXPECT_EQ(out.fx, in.fx);
+  EXPECT_EQ(out.fy, in.fy);
+  EXPECT_EQ(out.cx, in.cx);
+  EXPECT_EQ(out.cy, in.cy);
+}
+
+TEST(Conversions, SuperpixelsRoundTrip) {
+  dasp::Superpixels in;
+  in.labels = randomImage(4, 5, CV_32SC1, -1, 2, 4);
+  for (int i = 0; i < 2; ++i) {
+    dasp::Superpixel sp;
+    sp.id = i;
+    sp.u = 1.5f + i;
+    sp.v = 2.25f;
+    sp.pixel_count = 10 + i;
+    sp.color = {0.1f, 0.2f, 0.3f};
+    sp.position = {0.5f, -0.25f, 1.5f + i};
+    sp.normal = {0.0f, 0.6f, -0.8f};
+    sp.radius_m = 0.02f;
+    sp.density = 0.001f;
+    sp.thickness = 0.003f;
+    sp.eccentricity = 0.4f;
+    sp.flatness = 0.9f;
+    sp.area_m2 = 0.0011f;
+    in.superpixels.push_back(sp);
+  }
+  const auto msg = dasp_ros::toSuperpixelArrayMsg(in, header());
+  EXPECT_EQ(msg.width, 5u);
+  EXPECT_EQ(msg.height, 4u);
+  const auto out = dasp_ros::toSuperpixels(msg, dasp_ros::toLabelImageMsg(in.labels, header()));
+  EXPECT_TRUE(same(out.labels, in.labels));
+  ASSERT_EQ(out.superpixels.size(), in.superpixels.size());
+  for (std::size_t i = 0; i < in.superpixels.size(); ++i) {
+    const auto& a = in.superpixels[i];
+    const auto& b = out.superpixels[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.u, b.u);
+    EXPECT_EQ(a.pixel_count, b.pixel_count);
+    EXPECT_EQ(a.color, b.color);
+    EXPECT_EQ(a.position, b.position);
+    EXPECT_EQ(a.normal, b.normal);
+    EXPECT_EQ(a.radius_m, b.radius_m);
+    EXPECT_EQ(a.density, b.density);
+    EXPECT_EQ(a.thickness, b.thickness);
+    EXPECT_EQ(a.eccentricity, b.eccentricity);
+    EXPECT_EQ(a.flatness, b.flatness);
+    EXPECT_EQ(a.area_m2, b.area_m2);
+  }
+}
+
+TEST(Conversions, BadMessagesThrowInvalidArgument) {
+  sensor_msgs::Image msg = toColorImageMsg(cv::Mat(2, 2, CV_8UC3, cv::Scalar(0)), header());
+  msg.encoding = "yuv422";
+  EXPECT_THROW(toColorMat(msg), std::invalid_argument);
+  msg.encoding = "bgr8";
+  msg.data.resize(5);  // truncated data
+  EXPECT_THROW(toColorMat(msg), std::invalid_argument);
+  sensor_msgs::Image empty;
+  empty.encoding = "16UC1";
+  EXPECT_THROW(dasp_ros::toDepthMat(empty), std::invalid_argument);
+
+  const sensor_msgs::Image color = toColorImageMsg(cv::Mat(4, 4, CV_8UC3, cv::Scalar(0)), header());
+  const sensor_msgs::Image depth =
+      dasp_ros::toDepthImageMsg(cv::Mat(3, 4, CV_16UC1, cv::Scalar(0)), header());
+  const auto info = dasp_ros::toCameraInfo({}, 4, 4, header());
+  EXPECT_THROW(dasp_ros::toRgbdFrame(color, depth, info), std::invalid_argument);
+
+  sensor_msgs::CameraInfo zero;
+  EXPECT_THROW(dasp_ros::toIntrinsics(zero), std::invalid_argument);
+  sensor_msgs::CameraInfo nan_info = info;
+  nan_info.K[2] = std::nan("");
+  EXPECT_THROW(dasp_ros::toIntrinsics(nan_info), std::invalid_argument);
+}
+
+}  // namespace
