@@ -1,0 +1,71 @@
+// libFuzzer target for the event file readers (binary, text, rpg): any input must be read
+// without crashing, undefined behaviour or unbounded memory, and the reader's invariants must
+// hold. Built by run_fuzz.sh, not by the normal build.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "ebslam/event_io.h"
+
+namespace {
+
+struct Outcome {
+  ebslam::EventVector events;
+  std::optional<std::string> error;
+  ebslam::SensorSize sensor;
+  std::size_t non_monotonic = 0;
+};
+
+Outcome readAll(const std::string& bytes, const ebslam::EventReadOptions& options,
+                std::size_t batch_size) {
+  ebslam::EventFileReader reader(std::make_unique<std::istringstream>(bytes), options);
+  Outcome outcome;
+  ebslam::EventVector batch;
+  while (reader.next(batch, batch_size) > 0) {
+    if (batch.size() > batch_size) std::abort();
+    outcome.events.insert(outcome.events.end(), batch.begin(), batch.end());
+  }
+  if (!reader.done()) std::abort();
+  if (reader.next(batch, batch_size) != 0) std::abort();  // stays done
+  if (reader.eventsRead() != outcome.events.size()) std::abort();
+  outcome.error = reader.error();
+  outcome.sensor = reader.sensor();
+  outcome.non_monotonic = reader.nonMonotonicCount();
+  return outcome;
+}
+
+void check(const std::string& bytes, const ebslam::EventReadOptions& options) {
+  const Outcome big = readAll(bytes, options, 4096);
+  const Outcome small = readAll(bytes, options, 3);
+  // Batch size must not change what is read.
+  if (big.events != small.events || big.error != small.error ||
+      big.non_monotonic != small.non_monotonic) {
+    std::abort();
+  }
+  if (big.non_monotonic > big.events.size()) std::abort();
+  // Every event lies inside the reported sensor (binary header, declared or bounding box).
+  for (const ebslam::Event& e : big.events) {
+    if (!big.sensor.contains(e)) std::abort();
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  ebslam::EventReadOptions options;
+  check(bytes, options);  // detected format
+  for (auto format : {ebslam::EventFileFormat::kBinary, ebslam::EventFileFormat::kText,
+                      ebslam::EventFileFormat::kRpgText}) {
+    options.format = format;
+    check(bytes, options);
+  }
+  options.format = ebslam::EventFileFormat::kText;
+  options.sensor = ebslam::SensorSize{128, 128};
+  check(bytes, options);
+  return 0;
+}
