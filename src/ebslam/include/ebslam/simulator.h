@@ -99,11 +99,12 @@ struct SimulatorConfig {
   CameraModel camera;
   EventModelConfig events;
   /// Minimum render rate [Hz]; steps are subdivided further when the image would move more
-  /// than max_step_motion_px between two renders.
-  double render_rate_hz = 1000.0;
+  /// than max_step_motion_px between two renders (so fast motion renders at a higher rate).
+  double render_rate_hz = 250.0;
   /// Largest image motion between two renders [pixels], estimated at the sensor corners and
-  /// centre. Keeps the linear interpolation of event times accurate.
-  double max_step_motion_px = 0.25;
+  /// centre. Keeps the linear interpolation of event times accurate to a fraction of the time
+  /// an edge needs to cross one pixel.
+  double max_step_motion_px = 0.2;
   /// Standard deviation of the optical point spread [pixels]. The texture is blurred with this
   /// Gaussian (scaled to the plane at its distance from the first camera pose) combined with
   /// the pixel's own area (a unit box, variance 1/12 per axis).

@@ -1,0 +1,115 @@
+#include "ebslam/camera_model.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace ebslam {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Radial distortion factor of eq. 6.3 at undistorted radius r [pixels].
+double distortionFactor(const CameraModel& camera, double r) {
+  return 1.0 + camera.kappa1 * r + camera.kappa2 * r * r;
+}
+
+// Largest distance of a sensor corner from the principal point [pixels].
+double maxSensorRadius(const CameraModel& camera) {
+  const double dx = std::max(std::abs(-0.5 - camera.principal_point.x()),
+                             std::abs(camera.width - 0.5 - camera.principal_point.x()));
+  const double dy = std::max(std::abs(-0.5 - camera.principal_point.y()),
+                             std::abs(camera.height - 0.5 - camera.principal_point.y()));
+  return std::hypot(dx, dy);
+}
+
+}  // namespace
+
+double CameraModel::focalFromOpeningAngle(double alpha_fov_rad, int sensor_size) {
+  if (!(alpha_fov_rad > 0.0 && alpha_fov_rad < kPi)) {
+    throw std::invalid_argument("focalFromOpeningAngle: opening angle must lie in (0, pi) rad");
+  }
+  if (sensor_size <= 0) {
+    throw std::invalid_argument("focalFromOpeningAngle: sensor size must be positive");
+  }
+  return sensor_size / std::tan(0.5 * alpha_fov_rad);
+}
+
+void CameraModel::validate() const {
+  if (width <= 0 || height <= 0 || width > 65535 || height > 65535) {
+    throw std::invalid_argument("CameraModel: width and height must lie in [1, 65535] pixels");
+  }
+  if (!(std::isfinite(focal_px) && focal_px > 0.0)) {
+    throw std::invalid_argument("CameraModel: focal_px must be positive and finite");
+  }
+  if (!principal_point.allFinite() || !std::isfinite(kappa1) || !std::isfinite(kappa2)) {
+    throw std::invalid_argument("CameraModel: principal point and distortion must be finite");
+  }
+  // The distorted radius rd(r) = r (1 + k1 r + k2 r^2) must increase over every undistorted
+  // radius that reaches the sensor, otherwise undistort() is ambiguous. d rd / dr =
+  // 1 + 2 k1 r + 3 k2 r^2; check it on a fine grid up to a radius beyond the sensor corner.
+  const double r_max = 2.0 * maxSensorRadius(*this);
+  double reached = 0.0;
+  for (int i = 0; i <= 1000 && reached < maxSensorRadius(*this); ++i) {
+    const double r = r_max * i / 1000.0;
+    if (1.0 + 2.0 * kappa1 * r + 3.0 * kappa2 * r * r <= 0.0) {
+      throw std::invalid_argument(
+          "CameraModel: radial distortion (kappa1, kappa2) is not monotonic inside the sensor");
+    }
+    reached = r * distortionFactor(*this, r);
+  }
+}
+
+std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p_camera) const {
+  if (!(p_camera.z() > 0.0) || !p_camera.allFinite()) {
+    return std::nullopt;
+  }
+  const Eigen::Vector2d undistorted =
+      principal_point + focal_px * p_camera.head<2>() / p_camera.z();  // eq. 6.1
+  return distort(undistorted);
+}
+
+Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& undistorted_px) const {
+  const Eigen::Vector2d d = undistorted_px - principal_point;
+  return principal_point + d * distortionFactor(*this, d.norm());  // eq. 6.3
+}
+
+std::optional<Eigen::Vector2d> CameraModel::undistort(const Eigen::Vector2d& distorted_px) const {
+  const Eigen::Vector2d d = distorted_px - principal_point;
+  const double rd = d.norm();
+  if (rd == 0.0 || (kappa1 == 0.0 && kappa2 == 0.0)) {
+    return distorted_px;
+  }
+  // Solve r (1 + k1 r + k2 r^2) = rd for r by Newton's method from r = rd.
+  double r = rd;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const double g = r * distortionFactor(*this, r) - rd;
+    const double dg = 1.0 + 2.0 * kappa1 * r + 3.0 * kappa2 * r * r;
+    if (dg <= 0.0) {
+      return std::nullopt;
+    }
+    const double step = g / dg;
+    r -= step;
+    if (r < 0.0) {
+      return std::nullopt;
+    }
+    if (std::abs(step) < 1e-12 * (1.0 + rd)) {
+      break;
+    }
+  }
+  if (std::abs(r * distortionFactor(*this, r) - rd) > 1e-9 * (1.0 + rd)) {
+    return std::nullopt;
+  }
+  return principal_point + d * (r / rd);
+}
+
+std::optional<Eigen::Vector3d> CameraModel::backprojectRay(const Eigen::Vector2d& pixel) const {
+  const std::optional<Eigen::Vector2d> undistorted = undistort(pixel);
+  if (!undistorted) {
+    return std::nullopt;
+  }
+  const Eigen::Vector2d xy = (*undistorted - principal_point) / focal_px;
+  return Eigen::Vector3d(xy.x(), xy.y(), 1.0);
+}
+
+}  // namespace ebslam
