@@ -737,6 +737,9 @@ struct EventFileWriter::Impl {
     out.write(reinterpret_cast<const char*>(header), kBlockHeaderBytes);
     out.write(reinterpret_cast<const char*>(records.data()),
               static_cast<std::streamsize>(records.size()));
+    // Hand each finished block to the OS, so a recorder that crashes loses at most the open
+    // block (the reader recovers every complete block before the missing end marker).
+    out.flush();
     records.clear();
     block_count = 0;
     checkStream();

@@ -361,6 +361,24 @@ TEST_F(EventIoTest, StreamingReaderAndWriterMatchWholeFileApi) {
   EXPECT_EQ(calls, 21u);
 }
 
+TEST_F(EventIoTest, WriterThatNeverClosedLeavesARecoverableFile) {
+  const SensorSize sensor{128, 128};
+  const EventVector events = randomEvents(5000, sensor, 8);
+  auto writer = std::make_unique<EventFileWriter>(path("crash.ebe"), sensor);
+  writer->write(events);  // the first 4096 events form a complete block and are flushed
+  // Simulate a crash: copy the file while the writer is still open, before close().
+  fs::copy_file(path("crash.ebe"), path("copy.ebe"));
+  writer.reset();  // the destructor closes: the original becomes complete
+  const EventReadResult complete = readEventFile(path("crash.ebe"));
+  EXPECT_FALSE(complete.error);
+  EXPECT_EQ(complete.events, events);
+  const EventReadResult cut = readEventFile(path("copy.ebe"));
+  ASSERT_TRUE(cut.error);
+  EXPECT_NE(cut.error->find("end marker"), std::string::npos) << *cut.error;
+  EXPECT_GE(cut.events.size(), 4096u);
+  EXPECT_TRUE(std::equal(cut.events.begin(), cut.events.end(), events.begin()));
+}
+
 TEST_F(EventIoTest, MisuseAndMissingFilesThrow) {
   EXPECT_THROW(readEventFile(path("missing.ebe")), std::runtime_error);
   EXPECT_THROW(EventFileReader(path("missing.ebe")), std::runtime_error);
