@@ -1,0 +1,119 @@
+#pragma once
+
+// Event-based Particle Filter (thesis 6.4, alg. 7) for robot self-localisation under a ceiling
+// with a known map (6.5): SE(2) particles, per-event diffusion motion model (eq. 6.38/6.39 with
+// Delta_x, Delta_theta of eq. 6.9/6.10), sensor model from a cached distance transform of the
+// ceiling's edge map (eq. 6.36/6.37), exponential-decay scores (eq. 6.29/6.30), resampling
+// every K events.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "ebslam/ceiling_camera.h"
+#include "ebslam/event.h"
+#include "ebslam/particles2d.h"
+
+namespace ebslam {
+
+/// Which pose the filter reports.
+enum class PoseEstimateMode {
+  kWeightedMean,  ///< score-weighted mean of all particles (p_* of alg. 8)
+  kBestParticle,  ///< the particle with the highest score (alg. 7)
+};
+
+/// Parameters shared by EB-PF and EB-SLAM-2D's localisation step.
+struct EventFilterConfig {
+  int num_particles = 50;    ///< N (6.5.3: 50)
+  int batch_size = 3;        ///< B in [1, 64]: events scored together (6.5.3: 3), eq. 6.30/6.39
+  int resample_every = 100;  ///< K: events between resamplings (6.5.3: 100)
+  double beta = 0.95;        ///< relative influence of the last G0 events on a score (eq. 6.27)
+  /// G0: effective number of feature points seen, sets the decay alpha (eq. 6.27) and the
+  /// per-event diffusion Delta_x = D / (f G0), Delta_theta = 3 / (S G0) (eq. 6.9/6.10).
+  /// Thesis example value (6.3.2); calibrate it to the scene (see docs/results/events2d.md).
+  double g0 = 250.0;
+  /// Extra factor on the diffusion standard deviations (1 = eq. 6.38 exactly).
+  double diffusion_scale = 1.0;
+  double initial_spread_m = 0.0;    ///< std. dev. of the initial particle positions [m]
+  double initial_spread_rad = 0.0;  ///< std. dev. of the initial headings [rad]
+  /// Children keep their parent's score on resampling (false) or all scores are reset to the
+  /// mean (true).
+  bool reset_scores_on_resample = false;
+  PoseEstimateMode estimate = PoseEstimateMode::kWeightedMean;
+  std::uint64_t seed = 1;  ///< seeds the particle noise and resampling
+
+  /// Throws std::invalid_argument naming the offending parameter.
+  void validate() const;
+};
+
+/// EB-PF parameters: the filter plus the sensor model.
+struct EbpfConfig {
+  EventFilterConfig filter;
+  /// gamma: sensor-model standard deviation in units of W_trig (eq. 6.37: 0.5, events are
+  /// accurate to half a pixel).
+  double gamma = 0.5;
+  void validate() const;
+};
+
+/// Cached sensor model of eq. 6.37 on a grid: value exp(-0.5 (d / sigma)^2) with d the distance
+/// [m] from the cell centre to the nearest edge pixel (cv::distanceTransform, exact Euclidean).
+/// edges: CV_8UC1, non-zero on edges. Pixel (col, row) of the edge image has its centre at world
+/// (origin_centre_m.x() + col res, origin_centre_m.y() + row res), as CeilingMap in
+/// simulator_scenes.h. Throws std::invalid_argument for an empty or wrongly typed image, an image
+/// without edges, or non-positive resolution / sigma.
+GridMap2f makeEdgeLikelihoodMap(const cv::Mat& edges, double metres_per_pixel,
+                                const Eigen::Vector2d& origin_centre_m, double sigma_m);
+
+/// Checks a span of events against the sensor and the previous timestamp (last_t_us, updated).
+/// Throws std::invalid_argument naming the index of the first event outside the sensor or
+/// earlier than its predecessor.
+void validateEvents(const Event* events, std::size_t count, int width, int height,
+                    std::int64_t& last_t_us);
+
+/// Per-event diffusion standard deviations of eq. 6.9/6.10 [m, rad] for a filter config.
+struct Diffusion {
+  double sigma_xy_m = 0.0;
+  double sigma_theta_rad = 0.0;
+};
+Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera);
+
+class EventParticleFilter {
+ public:
+  /// likelihood: the cached sensor model (e.g. makeEdgeLikelihoodMap). Throws
+  /// std::invalid_argument for an invalid config or an empty likelihood grid.
+  EventParticleFilter(const EbpfConfig& config, const CeilingCamera& camera, GridMap2f likelihood,
+                      const Pose2& start);
+
+  /// Processes events in order, in batches of B (a trailing partial batch is processed as a
+  /// smaller batch with its own decay factors). All events are validated first: an event outside
+  /// the sensor or a timestamp earlier than the previous one throws std::invalid_argument and
+  /// nothing of the call is processed. An empty span is a no-op.
+  void process(const Event* events, std::size_t count);
+  void process(const EventVector& events) { process(events.data(), events.size()); }
+
+  /// Current pose estimate (config.filter.estimate).
+  Pose2 estimate() const;
+  const ParticleSet2D& particles() const { return particles_; }
+  std::uint64_t processedEvents() const { return processed_; }
+  double alpha() const { return alpha_; }
+  const Diffusion& diffusion() const { return diffusion_; }
+  const GridMap2f& likelihood() const { return likelihood_; }
+  const EbpfConfig& config() const { return config_; }
+
+ private:
+  EbpfConfig config_;
+  CeilingCamera camera_;
+  GridMap2f likelihood_;
+  ParticleSet2D particles_;
+  double alpha_ = 0.0;
+  Diffusion diffusion_;
+  std::vector<BatchDecay> decay_;  // index b - 1 for a batch of b events
+  std::uint64_t processed_ = 0;
+  int since_resample_ = 0;
+  std::int64_t last_t_us_;
+};
+
+}  // namespace ebslam

@@ -1,0 +1,119 @@
+#pragma once
+
+// Event-based SLAM in 2D (thesis 7.2-7.3, alg. 8): EB-PF localisation against a map that is
+// built from the events at the same time. Maps are dense grids on the ceiling plane:
+//  - occurrence map O: every event is splatted with a precomputed Gaussian at its ceiling point
+//    under the expected pose (eq. 7.6);
+//  - normalisation map Z: how often a cell could have produced an event, the length of its path
+//    on the sensor [pixels] under the motion of the expected pose (eq. 7.7), accumulated
+//    periodically (whenever the expected pose has moved the image by a set number of pixels)
+//    over the visible region only;
+//  - map M = O / (Z + Z0) (eq. 7.5), updated where O or Z change. Z0 > 0 is a prior count of
+//    possible observations that keeps barely observed cells from dividing by ~0 (alg. 8 sets
+//    M = 0 where Z = 0, which would leave the map empty until the pose estimate first moves).
+// G0 feedback (7.2.4): the diffusion and decay use the configured G0 and are not re-estimated
+// from M, which rules out the self-reinforcing loop low G0 -> more diffusion -> larger Z ->
+// smaller M -> lower G0 described in the thesis.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ebslam/ceiling_camera.h"
+#include "ebslam/ebpf.h"
+#include "ebslam/event.h"
+#include "ebslam/particles2d.h"
+
+namespace ebslam {
+
+/// Which poses splat an event into the occurrence map.
+enum class OccurrenceSplat {
+  kExpectedPose,  ///< one splat at the expected pose p_* (alg. 8 with p_*; fast)
+  kAllParticles,  ///< one splat per particle weighted by its normalised score (eq. 7.6)
+};
+
+struct Ebslam2dConfig {
+  /// Localisation (thesis table 7.1 uses N = 5..75; 10 is the smallest with a good RMSE).
+  EventFilterConfig filter = [] {
+    EventFilterConfig f;
+    f.num_particles = 10;
+    return f;
+  }();
+  /// Map cell edge length in units of W_trig (7.2.4: "in the order of W_trig").
+  double cell_size_wtrig = 1.0;
+  /// Side length of the square map, centred on the start pose [m].
+  double map_size_m = 24.0;
+  /// sigma of the occurrence splat in units of W_trig (7.2.3: a multiple of W_trig); the kernel
+  /// is cut at 3 sigma.
+  double splat_sigma_wtrig = 0.5;
+  OccurrenceSplat splat = OccurrenceSplat::kExpectedPose;
+  /// Z is updated when the expected pose has moved the image by this much [pixels] since the
+  /// last update (largest pixel displacement over the sensor).
+  double normalisation_step_px = 1.0;
+  /// Z0: prior number of possible observations per cell [pixels of path], see the file comment.
+  double normalisation_prior_px = 1.0;
+
+  /// Throws std::invalid_argument naming the offending parameter.
+  void validate() const;
+};
+
+class EventSlam2d {
+ public:
+  /// The map frame is the start pose's frame shifted by `start` (default: origin).
+  /// Throws std::invalid_argument for an invalid config.
+  EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& camera, const Pose2& start = {});
+
+  /// Processes events in order (batches of B; see EventParticleFilter::process for validation:
+  /// events outside the sensor or earlier than their predecessor throw std::invalid_argument and
+  /// nothing of the call is processed; an empty span is a no-op).
+  void process(const Event* events, std::size_t count);
+  void process(const EventVector& events) { process(events.data(), events.size()); }
+
+  /// Expected pose p_* (score-weighted mean of the particles) or the best particle
+  /// (config.filter.estimate).
+  Pose2 estimate() const;
+  const ParticleSet2D& particles() const { return particles_; }
+  const GridMap2f& occurrence() const { return occurrence_; }
+  const GridMap2f& normalisation() const { return normalisation_; }
+  const GridMap2f& map() const { return map_; }
+  std::uint64_t processedEvents() const { return processed_; }
+  std::uint64_t normalisationUpdates() const { return normalisation_updates_; }
+  double alpha() const { return alpha_; }
+  const Ebslam2dConfig& config() const { return config_; }
+
+ private:
+  void splat(const Pose2& pose, std::uint32_t pixel, float weight);
+  void updateNormalisation(const Pose2& from, const Pose2& to);
+  double imageMotionPx(const Pose2& a, const Pose2& b) const;
+  void refreshMapCell(std::size_t k) {
+    map_.data[k] = occurrence_.data[k] / (normalisation_.data[k] + z0_);
+  }
+
+  Ebslam2dConfig config_;
+  CeilingCamera camera_;
+  ParticleSet2D particles_;
+  GridMap2f occurrence_;
+  GridMap2f normalisation_;
+  GridMap2f map_;
+  std::vector<float> kernel_;  // (2 r + 1)^2 Gaussian weights summing to 1
+  int kernel_radius_ = 0;
+  float z0_ = 1.0f;
+  double alpha_ = 0.0;
+  Diffusion diffusion_;
+  std::vector<BatchDecay> decay_;
+  Pose2 expected_;
+  Pose2 last_normalised_;
+  std::uint64_t processed_ = 0;
+  std::uint64_t normalisation_updates_ = 0;
+  int since_resample_ = 0;
+  std::int64_t last_t_us_;
+};
+
+/// 8-bit image of a map for display: values scaled so that the given quantile of the non-zero
+/// cells maps to full scale; `dark_is_high` draws high values dark (thesis fig. 7.3/7.6).
+/// Row r of the image is grid row r (world y grows downwards in the image).
+cv::Mat mapToImage(const GridMap2f& map, double quantile = 0.99, bool dark_is_high = true);
+
+}  // namespace ebslam

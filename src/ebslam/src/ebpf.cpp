@@ -1,0 +1,147 @@
+#include "ebslam/ebpf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace ebslam {
+
+void EventFilterConfig::validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("EventFilterConfig: " + what);
+  };
+  if (num_particles < 1) fail("num_particles must be >= 1");
+  if (batch_size < 1 || batch_size > 64) fail("batch_size must lie in [1, 64]");
+  if (resample_every < 1) fail("resample_every must be >= 1");
+  if (!(beta > 0.0 && beta < 1.0)) fail("beta must lie in (0, 1)");
+  if (!(g0 > 0.0) || !std::isfinite(g0)) fail("g0 must be positive and finite");
+  if (!(diffusion_scale >= 0.0) || !std::isfinite(diffusion_scale)) {
+    fail("diffusion_scale must be >= 0 and finite");
+  }
+  if (!(initial_spread_m >= 0.0) || !(initial_spread_rad >= 0.0) ||
+      !std::isfinite(initial_spread_m) || !std::isfinite(initial_spread_rad)) {
+    fail("initial spreads must be >= 0 and finite");
+  }
+}
+
+void EbpfConfig::validate() const {
+  filter.validate();
+  if (!(gamma > 0.0) || !std::isfinite(gamma)) {
+    throw std::invalid_argument("EbpfConfig: gamma must be positive and finite");
+  }
+}
+
+GridMap2f makeEdgeLikelihoodMap(const cv::Mat& edges, double metres_per_pixel,
+                                const Eigen::Vector2d& origin_centre_m, double sigma_m) {
+  if (edges.empty() || edges.type() != CV_8UC1) {
+    throw std::invalid_argument("makeEdgeLikelihoodMap: edge image must be a non-empty CV_8UC1");
+  }
+  if (!(metres_per_pixel > 0.0) || !(sigma_m > 0.0)) {
+    throw std::invalid_argument("makeEdgeLikelihoodMap: resolution and sigma must be positive");
+  }
+  if (cv::countNonZero(edges) == 0) {
+    throw std::invalid_argument("makeEdgeLikelihoodMap: edge image has no edges");
+  }
+  // distanceTransform measures the distance to the nearest zero pixel: edges become zeros.
+  cv::Mat not_edges = (edges == 0);
+  cv::Mat distance_px;
+  cv::distanceTransform(not_edges, distance_px, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+  GridMap2f map(edges.cols, edges.rows, metres_per_pixel,
+                origin_centre_m.x() - 0.5 * metres_per_pixel,
+                origin_centre_m.y() - 0.5 * metres_per_pixel);
+  const double k = -0.5 * (metres_per_pixel / sigma_m) * (metres_per_pixel / sigma_m);
+  for (int r = 0; r < edges.rows; ++r) {
+    const float* d = distance_px.ptr<float>(r);
+    for (int c = 0; c < edges.cols; ++c) {
+      map.at(c, r) = static_cast<float>(std::exp(k * d[c] * d[c]));  // eq. 6.37
+    }
+  }
+  return map;
+}
+
+void validateEvents(const Event* events, std::size_t count, int width, int height,
+                    std::int64_t& last_t_us) {
+  std::int64_t t = last_t_us;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Event& e = events[i];
+    if (e.x >= width || e.y >= height) {
+      throw std::invalid_argument("event " + std::to_string(i) + " at (" + std::to_string(e.x) +
+                                  ", " + std::to_string(e.y) + ") lies outside the " +
+                                  std::to_string(width) + "x" + std::to_string(height) + " sensor");
+    }
+    if (e.t_us < t) {
+      throw std::invalid_argument("event " + std::to_string(i) + " has timestamp " +
+                                  std::to_string(e.t_us) + " us, earlier than its predecessor (" +
+                                  std::to_string(t) + " us): events must be time-ordered");
+    }
+    t = e.t_us;
+  }
+  last_t_us = t;
+}
+
+Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera) {
+  Diffusion d;
+  // eq. 6.9: Delta_x = D / (f G0); eq. 6.10: Delta_theta = 3 / (S G0) with S the sensor size.
+  d.sigma_xy_m = config.diffusion_scale * camera.wTrig() / config.g0;
+  d.sigma_theta_rad = config.diffusion_scale * 3.0 / (camera.width() * config.g0);
+  return d;
+}
+
+EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const CeilingCamera& camera,
+                                         GridMap2f likelihood, const Pose2& start)
+    : config_(config),
+      camera_(camera),
+      likelihood_(std::move(likelihood)),
+      last_t_us_(std::numeric_limits<std::int64_t>::min()) {
+  config_.validate();
+  if (likelihood_.data.empty()) {
+    throw std::invalid_argument("EventParticleFilter: empty likelihood map");
+  }
+  const EventFilterConfig& f = config_.filter;
+  alpha_ = decayFromInfluence(f.beta, f.g0);
+  diffusion_ = perEventDiffusion(f, camera_);
+  for (int b = 1; b <= f.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
+  particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
+}
+
+void EventParticleFilter::process(const Event* events, std::size_t count) {
+  if (count == 0) return;
+  std::int64_t t = last_t_us_;
+  validateEvents(events, count, camera_.width(), camera_.height(), t);
+  last_t_us_ = t;
+
+  const EventFilterConfig& f = config_.filter;
+  const float* ox = camera_.offsetX().data();
+  const float* oy = camera_.offsetY().data();
+  std::uint32_t index[64];
+  std::size_t i = 0;
+  while (i < count) {
+    const int b = static_cast<int>(std::min<std::size_t>(f.batch_size, count - i));
+    for (int j = 0; j < b; ++j) {
+      const Event& e = events[i + j];
+      index[j] = static_cast<std::uint32_t>(e.y) * camera_.width() + e.x;
+    }
+    // eq. 6.39: a batch of b events diffuses with b times the per-event variance.
+    const double root_b = std::sqrt(static_cast<double>(b));
+    particles_.step(index, b, ox, oy, likelihood_, diffusion_.sigma_xy_m * root_b,
+                    diffusion_.sigma_theta_rad * root_b, decay_[b - 1]);
+    i += b;
+    processed_ += b;
+    since_resample_ += b;
+    if (since_resample_ >= f.resample_every) {
+      particles_.resampleSystematic(f.reset_scores_on_resample);
+      since_resample_ -= f.resample_every;
+    }
+  }
+}
+
+Pose2 EventParticleFilter::estimate() const {
+  return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best()
+                                                                    : particles_.weightedMean();
+}
+
+}  // namespace ebslam

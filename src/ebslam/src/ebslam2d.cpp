@@ -1,0 +1,234 @@
+#include "ebslam/ebslam2d.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ebslam {
+
+void Ebslam2dConfig::validate() const {
+  filter.validate();
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("Ebslam2dConfig: " + what);
+  };
+  if (!positive(cell_size_wtrig)) fail("cell_size_wtrig must be positive");
+  if (!positive(map_size_m)) fail("map_size_m must be positive");
+  if (!positive(splat_sigma_wtrig)) fail("splat_sigma_wtrig must be positive");
+  if (!positive(normalisation_step_px)) fail("normalisation_step_px must be positive");
+  if (!positive(normalisation_prior_px)) fail("normalisation_prior_px must be positive");
+}
+
+EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& camera,
+                         const Pose2& start)
+    : config_(config), camera_(camera), last_t_us_(std::numeric_limits<std::int64_t>::min()) {
+  config_.validate();
+  const double res = config_.cell_size_wtrig * camera_.wTrig();
+  const int cells = static_cast<int>(std::ceil(config_.map_size_m / res));
+  if (cells > 20000) {
+    throw std::invalid_argument("Ebslam2dConfig: map of " + std::to_string(cells) +
+                                " cells per side is too large (max 20000)");
+  }
+  const double ox = start.x - 0.5 * cells * res;
+  const double oy = start.y - 0.5 * cells * res;
+  occurrence_ = GridMap2f(cells, cells, res, ox, oy);
+  normalisation_ = GridMap2f(cells, cells, res, ox, oy);
+  map_ = GridMap2f(cells, cells, res, ox, oy);
+  z0_ = static_cast<float>(config_.normalisation_prior_px);
+
+  // Precomputed Gaussian splat kernel (7.2.4), normalised to sum 1: O counts events.
+  const double sigma_cells = config_.splat_sigma_wtrig / config_.cell_size_wtrig;
+  kernel_radius_ = std::max(1, static_cast<int>(std::ceil(3.0 * sigma_cells)));
+  const int side = 2 * kernel_radius_ + 1;
+  kernel_.resize(static_cast<std::size_t>(side) * side);
+  double total = 0.0;
+  for (int dy = -kernel_radius_; dy <= kernel_radius_; ++dy) {
+    for (int dx = -kernel_radius_; dx <= kernel_radius_; ++dx) {
+      const double w = std::exp(-0.5 * (dx * dx + dy * dy) / (sigma_cells * sigma_cells));
+      kernel_[static_cast<std::size_t>(dy + kernel_radius_) * side + dx + kernel_radius_] =
+          static_cast<float>(w);
+      total += w;
+    }
+  }
+  for (float& w : kernel_) w = static_cast<float>(w / total);
+
+  const EventFilterConfig& f = config_.filter;
+  alpha_ = decayFromInfluence(f.beta, f.g0);
+  diffusion_ = perEventDiffusion(f, camera_);
+  for (int b = 1; b <= f.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
+  particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
+  expected_ = start;
+  last_normalised_ = start;
+}
+
+void EventSlam2d::process(const Event* events, std::size_t count) {
+  if (count == 0) return;
+  std::int64_t t = last_t_us_;
+  validateEvents(events, count, camera_.width(), camera_.height(), t);
+  last_t_us_ = t;
+
+  const EventFilterConfig& f = config_.filter;
+  const float* ox = camera_.offsetX().data();
+  const float* oy = camera_.offsetY().data();
+  std::uint32_t index[64];
+  std::size_t i = 0;
+  while (i < count) {
+    const int b = static_cast<int>(std::min<std::size_t>(f.batch_size, count - i));
+    for (int j = 0; j < b; ++j) {
+      const Event& e = events[i + j];
+      index[j] = static_cast<std::uint32_t>(e.y) * camera_.width() + e.x;
+    }
+    // Localisation: EB-PF step against the current map M (alg. 8, "update particles").
+    const double root_b = std::sqrt(static_cast<double>(b));
+    particles_.step(index, b, ox, oy, map_, diffusion_.sigma_xy_m * root_b,
+                    diffusion_.sigma_theta_rad * root_b, decay_[b - 1]);
+    i += b;
+    processed_ += b;
+    since_resample_ += b;
+    if (since_resample_ >= f.resample_every) {
+      particles_.resampleSystematic(f.reset_scores_on_resample);
+      since_resample_ -= f.resample_every;
+    }
+    // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
+    expected_ = particles_.weightedMean();
+    if (config_.splat == OccurrenceSplat::kExpectedPose) {
+      for (int j = 0; j < b; ++j) splat(expected_, index[j], 1.0f);
+    } else {
+      for (int p = 0; p < particles_.size(); ++p) {
+        const auto w = static_cast<float>(particles_.normalisedWeight(p));
+        if (w <= 0.0f) continue;
+        const Pose2 pose = particles_.particle(p);
+        for (int j = 0; j < b; ++j) splat(pose, index[j], w);
+      }
+    }
+    // Normalisation (eq. 7.7), periodically: once the expected pose moved the image enough.
+    if (imageMotionPx(last_normalised_, expected_) >= config_.normalisation_step_px) {
+      updateNormalisation(last_normalised_, expected_);
+      last_normalised_ = expected_;
+    }
+  }
+}
+
+Pose2 EventSlam2d::estimate() const {
+  return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best() : expected_;
+}
+
+void EventSlam2d::splat(const Pose2& pose, std::uint32_t pixel, float weight) {
+  const double ox = camera_.offsetX()[pixel];
+  const double oy = camera_.offsetY()[pixel];
+  const double c = std::cos(pose.theta);
+  const double s = std::sin(pose.theta);
+  const double wx = pose.x + c * ox - s * oy;
+  const double wy = pose.y + s * ox + c * oy;
+  const double inv = occurrence_.invResolution();
+  const int col = static_cast<int>(std::floor((wx - occurrence_.origin_x_m) * inv));
+  const int row = static_cast<int>(std::floor((wy - occurrence_.origin_y_m) * inv));
+  const int r = kernel_radius_;
+  if (col < r || row < r || col + r >= occurrence_.width || row + r >= occurrence_.height) {
+    return;  // near or beyond the map border: dropped
+  }
+  const int side = 2 * r + 1;
+  const float* k = kernel_.data();
+  for (int dy = -r; dy <= r; ++dy) {
+    const std::size_t base = static_cast<std::size_t>(row + dy) * occurrence_.width + col - r;
+    for (int dx = 0; dx < side; ++dx) {
+      occurrence_.data[base + dx] += weight * k[(dy + r) * side + dx];
+      refreshMapCell(base + dx);
+    }
+  }
+}
+
+double EventSlam2d::imageMotionPx(const Pose2& a, const Pose2& b) const {
+  // Translation moves every pixel by |dt| / W_trig; rotation moves the outermost pixel by
+  // |dtheta| times its radius.
+  const double dt = std::hypot(b.x - a.x, b.y - a.y) / camera_.wTrig();
+  const double dth = std::abs(std::remainder(b.theta - a.theta, 2.0 * M_PI));
+  return dt + dth * camera_.footprintRadius() / camera_.wTrig();
+}
+
+void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
+  ++normalisation_updates_;
+  const GridMap2f& z = normalisation_;
+  const double radius = camera_.footprintRadius() + 2.0 * z.resolution_m;
+  const double inv = z.invResolution();
+  const double res = z.resolution_m;
+  const int r0 = std::max(
+      0, static_cast<int>(std::floor((std::min(from.y, to.y) - radius - z.origin_y_m) * inv)));
+  const int r1 =
+      std::min(z.height - 1,
+               static_cast<int>(std::ceil((std::max(from.y, to.y) + radius - z.origin_y_m) * inv)));
+  // Projection mu (eq. 6.1 + 6.3) inlined: camera-frame ceiling point p -> undistorted offset
+  // d = p / W_trig [pixels] -> distorted pixel c + d L(|d|).
+  const CameraModel& cam = camera_.camera();
+  const double inv_w = 1.0 / camera_.wTrig();
+  const double k1 = cam.kappa1;
+  const double k2 = cam.kappa2;
+  const double pcx = cam.principal_point.x();
+  const double pcy = cam.principal_point.y();
+  const double u_max = cam.width - 0.5;
+  const double v_max = cam.height - 0.5;
+  const auto project = [&](double px, double py, double& u, double& v) {
+    const double dx = px * inv_w;
+    const double dy = py * inv_w;
+    const double rr = std::sqrt(dx * dx + dy * dy);
+    const double l = 1.0 + k1 * rr + k2 * rr * rr;
+    u = pcx + dx * l;
+    v = pcy + dy * l;
+    return u >= -0.5 && v >= -0.5 && u < u_max && v < v_max;
+  };
+  // Rotations R(-theta) scaled in: camera coordinates of u are R(-theta) (u - t).
+  const double ca = std::cos(from.theta), sa = std::sin(from.theta);
+  const double cb = std::cos(to.theta), sb = std::sin(to.theta);
+  const double cx_mid = 0.5 * (from.x + to.x);
+  const double half_span = 0.5 * std::abs(from.x - to.x) + radius;
+  for (int r = r0; r <= r1; ++r) {
+    const double wy = z.origin_y_m + (r + 0.5) * res;
+    const int c0 =
+        std::max(0, static_cast<int>(std::floor((cx_mid - half_span - z.origin_x_m) * inv)));
+    const int c1 = std::min(z.width - 1,
+                            static_cast<int>(std::ceil((cx_mid + half_span - z.origin_x_m) * inv)));
+    const double ay = wy - from.y;
+    const double by = wy - to.y;
+    const std::size_t row = static_cast<std::size_t>(r) * z.width;
+    for (int c = c0; c <= c1; ++c) {
+      const double wx = z.origin_x_m + (c + 0.5) * res;
+      const double ax = wx - from.x;
+      const double bx = wx - to.x;
+      double ua, va, ub, vb;
+      // A cell not visible under both poses is not updated (7.2.3).
+      if (!project(ca * ax + sa * ay, -sa * ax + ca * ay, ua, va)) continue;
+      if (!project(cb * bx + sb * by, -sb * bx + cb * by, ub, vb)) continue;
+      const std::size_t k = row + c;
+      const double du = ua - ub;
+      const double dv = va - vb;
+      normalisation_.data[k] += static_cast<float>(std::sqrt(du * du + dv * dv));  // eq. 7.7
+      refreshMapCell(k);
+    }
+  }
+}
+
+cv::Mat mapToImage(const GridMap2f& map, double quantile, bool dark_is_high) {
+  cv::Mat image(map.height, map.width, CV_8UC1, cv::Scalar(dark_is_high ? 255 : 0));
+  std::vector<float> values;
+  for (std::size_t k = 0; k < map.cellCount(); ++k) {
+    if (map.data[k] > 0.0f) values.push_back(map.data[k]);
+  }
+  if (values.empty()) return image;
+  const std::size_t q =
+      std::min(values.size() - 1, static_cast<std::size_t>(quantile * (values.size() - 1)));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(q), values.end());
+  const float top = std::max(values[q], 1e-30f);
+  for (int r = 0; r < map.height; ++r) {
+    auto* row = image.ptr<std::uint8_t>(r);
+    for (int c = 0; c < map.width; ++c) {
+      const float v = std::min(1.0f, map.at(c, r) / top);
+      const auto level = static_cast<std::uint8_t>(std::lround(255.0f * v));
+      row[c] = dark_is_high ? static_cast<std::uint8_t>(255 - level) : level;
+    }
+  }
+  return image;
+}
+
+}  // namespace ebslam

@@ -1,0 +1,243 @@
+#include "ebslam/particles2d.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace ebslam {
+
+GridMap2f::GridMap2f(int w, int h, double res, double ox, double oy, float value)
+    : width(w), height(h), resolution_m(res), origin_x_m(ox), origin_y_m(oy) {
+  if (w <= 0 || h <= 0) throw std::invalid_argument("GridMap2f: size must be positive");
+  if (!(res > 0.0) || !std::isfinite(res)) {
+    throw std::invalid_argument("GridMap2f: resolution must be positive and finite");
+  }
+  data.assign(static_cast<std::size_t>(w) * h + 1, value);
+  data.back() = 0.0f;  // value outside the grid
+  inv_resolution_ = 1.0 / res;
+}
+
+namespace {
+
+constexpr int kNormalTableBits = 12;
+constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
+
+double inverseNormalCdf(double p) {
+  // Bisection on Phi(x) = 0.5 erfc(-x / sqrt 2): robust in the far tails, run once per table.
+  double lo = -10.0;
+  double hi = 10.0;
+  for (int it = 0; it < 64; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+const std::vector<float>& normalTable() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(kNormalTableSize);
+    for (std::size_t i = 0; i < kNormalTableSize; ++i) {
+      t[i] = static_cast<float>(
+          inverseNormalCdf((static_cast<double>(i) + 0.5) / static_cast<double>(kNormalTableSize)));
+    }
+    return t;
+  }();
+  return table;
+}
+
+std::uint64_t splitMix64(std::uint64_t& x) {
+  std::uint64_t z = (x += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+}  // namespace
+
+FastNormalGenerator::FastNormalGenerator(std::uint64_t seed) {
+  for (auto& s : state_) s = splitMix64(seed);
+  table_ = normalTable().data();  // built once, outside any timed loop
+}
+
+std::uint64_t FastNormalGenerator::nextU64() {
+  // xoshiro256++ (Blackman & Vigna).
+  const std::uint64_t result = rotl(state_[0] + state_[3], 23) + state_[0];
+  const std::uint64_t t = state_[1] << 17;
+  state_[2] ^= state_[0];
+  state_[3] ^= state_[1];
+  state_[1] ^= state_[2];
+  state_[0] ^= state_[3];
+  state_[2] ^= t;
+  state_[3] = rotl(state_[3], 45);
+  return result;
+}
+
+void FastNormalGenerator::normals4(float out[4]) {
+  const std::uint64_t r = nextU64();
+  constexpr std::uint64_t mask = kNormalTableSize - 1;
+  out[0] = table_[r & mask];
+  out[1] = table_[(r >> 16) & mask];
+  out[2] = table_[(r >> 32) & mask];
+  out[3] = table_[(r >> 48) & mask];
+}
+
+void ParticleSet2D::reset(int n, const Pose2& start, double spread_xy_m, double spread_theta_rad,
+                          double initial_score, std::uint64_t seed) {
+  if (n < 1) throw std::invalid_argument("ParticleSet2D: need at least one particle");
+  rng_ = FastNormalGenerator(seed);
+  const auto count = static_cast<std::size_t>(n);
+  x_.resize(count);
+  y_.resize(count);
+  cos_.resize(count);
+  sin_.resize(count);
+  cell_.resize(count);
+  sum_.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    float g[4];
+    rng_.normals4(g);
+    x_[i] = static_cast<float>(start.x + spread_xy_m * g[0]);
+    y_[i] = static_cast<float>(start.y + spread_xy_m * g[1]);
+    const double th = start.theta + spread_theta_rad * g[2];
+    cos_[i] = static_cast<float>(std::cos(th));
+    sin_[i] = static_cast<float>(std::sin(th));
+  }
+  scores_.assign(count, initial_score);
+}
+
+void ParticleSet2D::step(const std::uint32_t* pixel_index, int batch, const float* offset_x,
+                         const float* offset_y, const GridMap2f& map, double sigma_xy,
+                         double sigma_theta, const BatchDecay& decay) {
+  const std::size_t n = x_.size();
+  float* __restrict px = x_.data();
+  float* __restrict py = y_.data();
+  float* __restrict pc = cos_.data();
+  float* __restrict ps = sin_.data();
+  // Motion model: diffusion (eq. 6.38/6.39). The heading vector turns by a small angle d with
+  // cos d ~ 1 - d^2/2 and sin d ~ d (the per-batch diffusion is far below 1e-2 rad).
+  const auto sxy = static_cast<float>(sigma_xy);
+  const auto sth = static_cast<float>(sigma_theta);
+  for (std::size_t i = 0; i < n; ++i) {
+    float g[4];
+    rng_.normals4(g);
+    px[i] += sxy * g[0];
+    py[i] += sxy * g[1];
+    const float d = sth * g[2];
+    const float cd = 1.0f - 0.5f * d * d;
+    const float c = pc[i] * cd - ps[i] * d;
+    const float s = ps[i] * cd + pc[i] * d;
+    pc[i] = c;
+    ps[i] = s;
+  }
+  // Sensor model: map value at each event's ceiling point under each particle's pose. Split into
+  // a branch-free index loop and a gather loop; points outside the grid read the trailing 0.
+  float* __restrict sum = sum_.data();
+  std::uint32_t* __restrict cell = cell_.data();
+  std::fill(sum_.begin(), sum_.end(), 0.0f);
+  const auto inv_res = static_cast<float>(map.invResolution());
+  const auto org_x = static_cast<float>(map.origin_x_m);
+  const auto org_y = static_cast<float>(map.origin_y_m);
+  const auto width = static_cast<float>(map.width);
+  const auto height = static_cast<float>(map.height);
+  const auto outside = static_cast<std::uint32_t>(map.cellCount());
+  const std::uint32_t stride = static_cast<std::uint32_t>(map.width);
+  const float* data = map.data.data();
+  for (int j = 0; j < batch; ++j) {
+    const float ox = offset_x[pixel_index[j]];
+    const float oy = offset_y[pixel_index[j]];
+    for (std::size_t i = 0; i < n; ++i) {
+      const float fc = (px[i] + pc[i] * ox - ps[i] * oy - org_x) * inv_res;
+      const float fr = (py[i] + ps[i] * ox + pc[i] * oy - org_y) * inv_res;
+      const bool in = fc >= 0.0f && fr >= 0.0f && fc < width && fr < height;
+      const std::uint32_t k = static_cast<std::uint32_t>(in ? fr : 0.0f) * stride +
+                              static_cast<std::uint32_t>(in ? fc : 0.0f);
+      cell[i] = in ? k : outside;
+    }
+    for (std::size_t i = 0; i < n; ++i) sum[i] += data[cell[i]];
+  }
+  // Score update with the decay applied to the global scale (eq. 6.29/6.30).
+  const double factor = scores_.beginUpdate(decay);
+  std::vector<double>& stored = scores_.stored();
+  for (std::size_t i = 0; i < n; ++i) stored[i] += factor * sum[i];
+}
+
+bool ParticleSet2D::resampleSystematic(bool reset_scores) {
+  const std::vector<double>& w = scores_.stored();
+  const std::size_t n = w.size();
+  double total = 0.0;
+  for (double v : w) total += v;
+  if (!(total > 0.0) || !std::isfinite(total)) return false;
+
+  scratch_x_.resize(n);
+  scratch_y_.resize(n);
+  scratch_c_.resize(n);
+  scratch_s_.resize(n);
+  scratch_w_.resize(n);
+  const double step = total / static_cast<double>(n);
+  double target = rng_.uniform() * step;
+  double cumulative = w[0];
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    while (cumulative <= target && k + 1 < n) cumulative += w[++k];
+    // Renormalise the heading vector here, once per resampling, against rounding drift.
+    const float inv_norm = 1.0f / std::sqrt(cos_[k] * cos_[k] + sin_[k] * sin_[k]);
+    scratch_x_[j] = x_[k];
+    scratch_y_[j] = y_[k];
+    scratch_c_[j] = cos_[k] * inv_norm;
+    scratch_s_[j] = sin_[k] * inv_norm;
+    scratch_w_[j] = w[k];
+    target += step;
+  }
+  x_.swap(scratch_x_);
+  y_.swap(scratch_y_);
+  cos_.swap(scratch_c_);
+  sin_.swap(scratch_s_);
+  std::vector<double>& stored = scores_.stored();
+  if (reset_scores) {
+    std::fill(stored.begin(), stored.end(), step);
+  } else {
+    stored.swap(scratch_w_);
+  }
+  scores_.renormalise();
+  return true;
+}
+
+Pose2 ParticleSet2D::weightedMean() const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double v : w) total += v;
+  const bool uniform = !(total > 0.0) || !std::isfinite(total);
+  double sx = 0.0, sy = 0.0, sc = 0.0, ss = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = uniform ? 1.0 : w[i];
+    sx += wi * x_[i];
+    sy += wi * y_[i];
+    sc += wi * cos_[i];
+    ss += wi * sin_[i];
+  }
+  const double norm = uniform ? static_cast<double>(x_.size()) : total;
+  return {sx / norm, sy / norm, std::atan2(ss, sc)};
+}
+
+Pose2 ParticleSet2D::best() const {
+  const std::vector<double>& w = scores_.stored();
+  const auto it = std::max_element(w.begin(), w.end());
+  return particle(static_cast<int>(it - w.begin()));
+}
+
+Pose2 ParticleSet2D::particle(int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  return {x_[k], y_[k], std::atan2(sin_[k], cos_[k])};
+}
+
+double ParticleSet2D::normalisedWeight(int i) const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double v : w) total += v;
+  if (!(total > 0.0)) return 0.0;
+  return w[static_cast<std::size_t>(i)] / total;
+}
+
+}  // namespace ebslam

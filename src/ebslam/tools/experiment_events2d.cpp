@@ -1,0 +1,246 @@
+// Floor-robot experiment of thesis 6.5.3 / 7.3 in simulation: for every freiburg2_pioneer_*
+// motion-capture trajectory, an eDVS looking up at a ceiling 2.59 m above is driven along the
+// planar robot path (event simulator), then EB-PF (known ceiling edge map) and EB-SLAM-2D
+// (N = 5, 10, 25, 75) run on the events with several seeds. Writes into --out:
+//   runs.csv               one line per (trajectory, method, N, B, seed): RMSE, failure, events/s
+//   <traj>/events.ebe, ground_truth.tum, ceiling_edges.png, ceiling.png  (cached simulation)
+//   <traj>/ebpf_s<seed>.tum, slam_N<n>_s<seed>.tum (+ _map.png for the first seed)
+// docs/results/events2d.md is generated from it by scripts/events2d_report.py; the whole
+// pipeline is scripts/events2d_experiment.sh.
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "ebslam/ebpf.h"
+#include "ebslam/ebslam2d.h"
+#include "ebslam/event_io.h"
+#include "ebslam/simulator.h"
+#include "ebslam/simulator_scenes.h"
+#include "ebslam/trajectory.h"
+#include "ebslam/trajectory_evaluation.h"
+#include "filter_tool_common.h"
+
+namespace fs = std::filesystem;
+using namespace ebslam;
+
+namespace {
+
+struct Simulated {
+  EventVector events;
+  Trajectory ground_truth;
+  CeilingMap map;
+};
+
+Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duration_s,
+                      std::uint64_t seed) {
+  Simulated s;
+  const fs::path events_path = dir / "events.ebe";
+  const fs::path gt_path = dir / "ground_truth.tum";
+  const fs::path edges_path = dir / "ceiling_edges.png";
+  const fs::path meta_path = dir / "ceiling_map.txt";
+  SimulatorConfig sim;
+  sim.events.seed = seed;
+  if (fs::exists(events_path) && fs::exists(gt_path) && fs::exists(edges_path) &&
+      fs::exists(meta_path)) {
+    s.events = readEventFile(events_path.string()).events;
+    s.ground_truth = readTumTrajectory(gt_path.string());
+    s.map.edges = cv::imread(edges_path.string(), cv::IMREAD_GRAYSCALE);
+    std::ifstream meta(meta_path);
+    meta >> s.map.metres_per_pixel >> s.map.origin_m.x() >> s.map.origin_m.y();
+    return s;
+  }
+  fs::create_directories(dir);
+  const Trajectory floor = makeFloorRobotTrajectory(readTumTrajectory(mocap.string()));
+  const double t0 = floor.front().t_s;
+  const double t1 =
+      duration_s > 0.0 ? std::min(floor.back().t_s, t0 + duration_s) : floor.back().t_s;
+  Trajectory used;
+  for (const StampedPose& p : floor) {
+    if (p.t_s <= t1 + 0.1) used.push_back(p);
+  }
+  const FloorRegion region = visibleCeilingRegion(used, sim.camera);
+  LinesAndCirclesConfig texture_config;  // thesis 6.5.3: random lines and circles
+  texture_config.seed = seed;
+  const double metres_per_texel = 0.01;
+  texture_config.width_px = static_cast<int>((region.max.x() - region.min.x()) / 0.01) + 1;
+  texture_config.height_px = static_cast<int>((region.max.y() - region.min.y()) / 0.01) + 1;
+  // Keep the density of the default texture (40 lines, 25 circles per 10.24 m x 10.24 m).
+  const double area_factor =
+      (texture_config.width_px * texture_config.height_px) / (1024.0 * 1024.0);
+  texture_config.line_count = static_cast<int>(std::lround(40 * area_factor));
+  texture_config.circle_count = static_cast<int>(std::lround(25 * area_factor));
+  const cv::Mat texture = makeLinesAndCirclesTexture(texture_config);
+  const Scene scene = makeCeilingScene(texture, region, metres_per_texel);
+  const EventSimulator simulator(sim);
+  SimulationResult result = simulator.simulate(scene, used, t0, t1);
+  s.events = std::move(result.events);
+  s.ground_truth = std::move(result.ground_truth);
+  // Known ceiling map for EB-PF as in fig. 6.8: Canny edges of the ceiling image (here the
+  // texture itself, blurred to about half a sensor pixel on the ceiling like CeilingMapConfig).
+  // Texel (col, row) covers region.min + [col, col + 1) * metres_per_texel, so the centre of
+  // texel (0, 0) is region.min + metres_per_texel / 2.
+  cv::Mat texture8, blurred;
+  texture.convertTo(texture8, CV_8U, 255.0);
+  cv::GaussianBlur(texture8, blurred, cv::Size(), 0.015 / metres_per_texel);
+  cv::Canny(blurred, s.map.edges, 20, 50);
+  s.map.intensity = texture;
+  s.map.metres_per_pixel = metres_per_texel;
+  s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * metres_per_texel);
+  writeEventFile(events_path.string(), s.events, SensorSize{128, 128});
+  writeTumTrajectory(gt_path.string(), s.ground_truth);
+  cv::imwrite(edges_path.string(), s.map.edges);
+  cv::Mat intensity8;
+  s.map.intensity.convertTo(intensity8, CV_8U, 255.0);
+  cv::imwrite((dir / "ceiling.png").string(), intensity8);
+  std::ofstream meta(meta_path);
+  meta.precision(12);
+  meta << s.map.metres_per_pixel << ' ' << s.map.origin_m.x() << ' ' << s.map.origin_m.y() << '\n';
+  return s;
+}
+
+// Position / rotation RMSE of an EB-PF run in the map (= world) frame, no alignment.
+std::pair<double, double> directRmse(const Trajectory& estimated, const Trajectory& truth) {
+  double sp = 0.0, sr = 0.0;
+  int n = 0;
+  for (const StampedPose& e : estimated) {
+    if (e.t_s < truth.front().t_s || e.t_s > truth.back().t_s) continue;
+    const StampedPose g = interpolatePose(truth, e.t_s);
+    sp += (e.position.head<2>() - g.position.head<2>()).squaredNorm();
+    const double dth =
+        std::remainder(tools::toPose2(e).theta - tools::toPose2(g).theta, 2.0 * M_PI);
+    sr += dth * dth;
+    ++n;
+  }
+  if (n == 0) return {NAN, NAN};
+  return {std::sqrt(sp / n), std::sqrt(sr / n) * 180.0 / M_PI};
+}
+
+std::vector<int> parseList(const std::string& text) {
+  std::vector<int> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(std::stoi(item));
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Simulated floor-robot runs: EB-PF and EB-SLAM-2D accuracy and speed"};
+  std::string data_dir = "../shared/data";
+  std::string out_dir = "events2d_runs";
+  std::string particles_text = "5,10,25,75";
+  double duration_s = 0.0;
+  int seeds = 3;
+  double failure_m = 0.3;
+  double g0 = 100.0;
+  int batch = 3;
+  app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
+      ->capture_default_str();
+  app.add_option("--out", out_dir, "output folder")->capture_default_str();
+  app.add_option("--duration", duration_s, "simulate only the first seconds (0 = all)")
+      ->capture_default_str();
+  app.add_option("--seeds", seeds, "filter seeds per trajectory")->capture_default_str();
+  app.add_option("--slam-particles", particles_text, "EB-SLAM-2D particle counts")
+      ->capture_default_str();
+  app.add_option("--failure", failure_m, "aligned position RMSE counted as diverged [m]")
+      ->capture_default_str();
+  app.add_option("--g0", g0, "G0 for both filters")->capture_default_str();
+  app.add_option("-B,--batch", batch, "batch size B")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    std::vector<fs::path> mocap_files;
+    for (const auto& entry : fs::directory_iterator(fs::path(data_dir) / "tum-groundtruth")) {
+      const std::string name = entry.path().filename().string();
+      if (name.find("freiburg2_pioneer_") != std::string::npos) mocap_files.push_back(entry.path());
+    }
+    std::sort(mocap_files.begin(), mocap_files.end());
+    if (mocap_files.empty())
+      throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
+    fs::create_directories(out_dir);
+    std::ofstream csv(fs::path(out_dir) / "runs.csv");
+    csv << "trajectory,method,particles,batch,seed,events,duration_s,rmse_pos_m,rmse_rot_deg,"
+           "failed,events_per_s\n";
+    const CeilingCamera camera(CameraModel{}, kThesisCeilingHeightM);
+    for (const fs::path& mocap : mocap_files) {
+      std::string name = mocap.filename().string();
+      name = name.substr(name.find("freiburg2_"));
+      name = name.substr(0, name.find("-groundtruth"));
+      const fs::path dir = fs::path(out_dir) / name;
+      const auto sim_start = std::chrono::steady_clock::now();
+      const Simulated run = simulateRun(mocap, dir, duration_s, 1);
+      const double sim_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
+      const double run_duration = run.ground_truth.back().t_s - run.ground_truth.front().t_s;
+      std::printf("%s: %zu events over %.1f s (simulation/loading %.1f s)\n", name.c_str(),
+                  run.events.size(), run_duration, sim_seconds);
+      std::fflush(stdout);
+      const Pose2 start = tools::toPose2(run.ground_truth.front());
+      TrajectoryEvaluationConfig eval;
+      eval.estimate_time_offset = false;  // simulated events share the ground truth's clock
+
+      for (int seed = 1; seed <= seeds; ++seed) {
+        EbpfConfig config;
+        config.filter.g0 = g0;
+        config.filter.batch_size = batch;
+        config.filter.seed = static_cast<std::uint64_t>(seed);
+        EventParticleFilter filter(
+            config, camera,
+            makeEdgeLikelihoodMap(run.map.edges, run.map.metres_per_pixel, run.map.origin_m,
+                                  config.gamma * camera.wTrig()),
+            start);
+        Trajectory estimate;
+        const double seconds = tools::runFilter(filter, run.events, 100, estimate);
+        writeTumTrajectory((dir / ("ebpf_s" + std::to_string(seed) + ".tum")).string(), estimate);
+        const auto [pos, rot] = directRmse(estimate, run.ground_truth);
+        const bool failed = !(pos <= failure_m);
+        csv << name << ",ebpf," << config.filter.num_particles << ',' << batch << ',' << seed << ','
+            << run.events.size() << ',' << run_duration << ',' << pos << ',' << rot << ',' << failed
+            << ',' << run.events.size() / seconds << '\n';
+        std::printf("  EB-PF   N=%3d seed %d: RMSE %.2f cm %.2f deg, %.0f events/s\n",
+                    config.filter.num_particles, seed, pos * 100, rot, run.events.size() / seconds);
+        std::fflush(stdout);
+      }
+      for (int n : parseList(particles_text)) {
+        for (int seed = 1; seed <= seeds; ++seed) {
+          Ebslam2dConfig config;
+          config.filter.g0 = g0;
+          config.filter.batch_size = batch;
+          config.filter.num_particles = n;
+          config.filter.seed = static_cast<std::uint64_t>(seed);
+          EventSlam2d slam(config, camera, start);
+          Trajectory estimate;
+          const double seconds = tools::runFilter(slam, run.events, 100, estimate);
+          const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
+          writeTumTrajectory((dir / (stem + ".tum")).string(), estimate);
+          if (seed == 1) cv::imwrite((dir / (stem + "_map.png")).string(), mapToImage(slam.map()));
+          const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
+          const bool failed = !(e.position_rmse_m <= failure_m);
+          csv << name << ",ebslam2d," << n << ',' << batch << ',' << seed << ','
+              << run.events.size() << ',' << run_duration << ',' << e.position_rmse_m << ','
+              << e.rotation_rmse_deg << ',' << failed << ',' << run.events.size() / seconds << '\n';
+          std::printf("  EB-SLAM N=%3d seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n", n, seed,
+                      e.position_rmse_m * 100, e.rotation_rmse_deg, failed ? " (diverged)" : "",
+                      run.events.size() / seconds);
+          std::fflush(stdout);
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

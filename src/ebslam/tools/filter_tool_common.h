@@ -1,0 +1,110 @@
+#pragma once
+
+// Options and output shared by the run_ebpf and run_ebslam2d tools (not a tool itself).
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "ebslam/camera_model.h"
+#include "ebslam/ceiling_camera.h"
+#include "ebslam/ebpf.h"
+#include "ebslam/event_io.h"
+#include "ebslam/trajectory.h"
+
+namespace ebslam::tools {
+
+struct CameraOptions {
+  CameraModel camera;
+  double ceiling_m = 2.59;
+  void add(CLI::App& app) {
+    app.add_option("--focal", camera.focal_px, "focal length [pixels]")->capture_default_str();
+    app.add_option("--cx", camera.principal_point.x(), "optical centre column [pixels]")
+        ->capture_default_str();
+    app.add_option("--cy", camera.principal_point.y(), "optical centre row [pixels]")
+        ->capture_default_str();
+    app.add_option("--kappa1", camera.kappa1, "radial distortion, eq. 6.3 [1/pixel]")
+        ->capture_default_str();
+    app.add_option("--kappa2", camera.kappa2, "radial distortion, eq. 6.3 [1/pixel^2]")
+        ->capture_default_str();
+    app.add_option("--ceiling", ceiling_m, "distance sensor - ceiling D [m]")
+        ->capture_default_str();
+  }
+};
+
+inline void addFilterOptions(CLI::App& app, EventFilterConfig& f) {
+  app.add_option("-N,--particles", f.num_particles, "number of particles N")->capture_default_str();
+  app.add_option("-B,--batch", f.batch_size, "batch size B")->capture_default_str();
+  app.add_option("-K,--resample", f.resample_every, "events between resamplings K")
+      ->capture_default_str();
+  app.add_option("--beta", f.beta, "influence of the last G0 events (eq. 6.27)")
+      ->capture_default_str();
+  app.add_option("--g0", f.g0, "effective feature count G0 (eq. 6.9, 6.10, 6.27)")
+      ->capture_default_str();
+  app.add_option("--diffusion-scale", f.diffusion_scale, "factor on the diffusion (eq. 6.38)")
+      ->capture_default_str();
+  app.add_option("--initial-spread", f.initial_spread_m, "initial position spread [m]")
+      ->capture_default_str();
+  app.add_option("--initial-spread-rad", f.initial_spread_rad, "initial heading spread [rad]")
+      ->capture_default_str();
+  app.add_flag("--best-particle", "report the best particle instead of the weighted mean")
+      ->each([&f](const std::string&) { f.estimate = PoseEstimateMode::kBestParticle; });
+  app.add_option("--seed", f.seed, "random seed")->capture_default_str();
+}
+
+/// Camera pose (camera -> world, z up) of an SE(2) pose, as in simulator_scenes.h.
+inline StampedPose toStampedPose(double t_s, const Pose2& p) {
+  StampedPose s;
+  s.t_s = t_s;
+  s.position = Eigen::Vector3d(p.x, p.y, 0.0);
+  s.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(p.theta, Eigen::Vector3d::UnitZ()));
+  return s;
+}
+
+/// SE(2) pose of a camera pose with z up (yaw of the rotation).
+inline Pose2 toPose2(const StampedPose& s) {
+  const Eigen::Matrix3d r = s.orientation.toRotationMatrix();
+  return {s.position.x(), s.position.y(), std::atan2(r(1, 0), r(0, 0))};
+}
+
+/// Reads events; a damaged file is processed up to the damage with a warning, an empty stream or
+/// events that break the filter's preconditions are reported as errors by the caller.
+inline EventReadResult readEventsOrThrow(const std::string& path) {
+  EventReadResult r = readEventFile(path);
+  if (r.error)
+    std::fprintf(stderr, "warning: %s (using the %zu events before it)\n", r.error->c_str(),
+                 r.events.size());
+  if (r.events.empty()) throw std::runtime_error("no events in " + path);
+  if (r.non_monotonic > 0) {
+    throw std::runtime_error(path + ": " + std::to_string(r.non_monotonic) +
+                             " events have timestamps earlier than their predecessor (first at "
+                             "index " +
+                             std::to_string(*r.first_non_monotonic_index) +
+                             "); sort them first (ebslam_event_convert --sort)");
+  }
+  return r;
+}
+
+/// Runs `filter` over the events in chunks of `every` events, recording the estimate after each
+/// chunk. Returns the processing time [s] (file I/O excluded).
+template <typename Filter>
+double runFilter(Filter& filter, const EventVector& events, std::size_t every,
+                 Trajectory& trajectory) {
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < events.size(); i += every) {
+    const std::size_t n = std::min(every, events.size() - i);
+    filter.process(events.data() + i, n);
+    const double t = static_cast<double>(events[i + n - 1].t_us) * 1e-6;
+    if (!trajectory.empty() && t <= trajectory.back().t_s) continue;  // TUM needs rising times
+    trajectory.push_back(toStampedPose(t, filter.estimate()));
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace ebslam::tools
