@@ -39,6 +39,16 @@ packages=(
   xvfb xauth libgl1-mesa-dri hostname
 )
 
+# roslaunch/rostest need localhost to resolve (ROS_HOSTNAME=localhost is set by scripts/ros_env.sh).
+if ! getent hosts localhost >/dev/null 2>&1; then
+  if [ -w /etc/hosts ]; then
+    echo "127.0.0.1 localhost" >>/etc/hosts
+    echo "install_deps: added localhost to /etc/hosts"
+  else
+    echo "install_deps: warning: 'localhost' does not resolve; roslaunch will fail" >&2
+  fi
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
