@@ -24,8 +24,8 @@ struct PreparedPlane {
   cv::Mat texture;  // CV_32FC1, pre-filtered
   int cols = 0;
   int rows = 0;
-  double max_x = 0.0;  // largest sample coordinate in texel-centre units: cols - 1
-  double max_y = 0.0;
+  float max_x = 0.0f;  // largest sample coordinate in texel-centre units: cols - 1
+  float max_y = 0.0f;
   double extent_u = 0.0;  // extent in texels
   double extent_v = 0.0;
   Eigen::Vector3d origin;  // world
@@ -64,13 +64,13 @@ PlaneProjection planeProjection(const PreparedPlane& plane, const Eigen::Isometr
 // Bilinear lookup at texel coordinates (u, v); texel (c, r) covers [c, c + 1) x [r, r + 1).
 // Coordinates beyond the texture are clamped (repeating textures are tiled to the plane's full
 // extent beforehand, which avoids a costly modulo per sample).
-inline float sampleTexture(const PreparedPlane& plane, double u, double v) {
-  const double x = std::clamp(u - 0.5, 0.0, plane.max_x);
-  const double y = std::clamp(v - 0.5, 0.0, plane.max_y);
+inline float sampleTexture(const PreparedPlane& plane, float u, float v) {
+  const float x = std::clamp(u - 0.5f, 0.0f, plane.max_x);
+  const float y = std::clamp(v - 0.5f, 0.0f, plane.max_y);
   const int x0 = static_cast<int>(x);
   const int y0 = static_cast<int>(y);
-  const float ax = static_cast<float>(x - x0);
-  const float ay = static_cast<float>(y - y0);
+  const float ax = x - static_cast<float>(x0);
+  const float ay = y - static_cast<float>(y0);
   const int x1 = std::min(x0 + 1, plane.cols - 1);
   const float* row0 = plane.texture.ptr<float>(y0);
   const float* row1 = plane.texture.ptr<float>(std::min(y0 + 1, plane.rows - 1));
@@ -97,6 +97,8 @@ class Renderer {
             std::optional<Eigen::Vector3d> ray = camera.backprojectRay(pixel);
             // validate() guarantees invertible distortion over the sensor.
             rays_.push_back(ray ? *ray : Eigen::Vector3d(0.0, 0.0, 1.0));
+            ray_x_.push_back(static_cast<float>(rays_.back().x()));
+            ray_y_.push_back(static_cast<float>(rays_.back().y()));
           }
         }
       }
@@ -164,8 +166,8 @@ class Renderer {
       prepared.texture = texture;
       prepared.cols = texture.cols;
       prepared.rows = texture.rows;
-      prepared.max_x = texture.cols - 1;
-      prepared.max_y = texture.rows - 1;
+      prepared.max_x = static_cast<float>(texture.cols - 1);
+      prepared.max_y = static_cast<float>(texture.rows - 1);
       planes_.push_back(std::move(prepared));
     }
     projections_.resize(planes_.size());
@@ -180,23 +182,40 @@ class Renderer {
     intensity.resize(pixel_count);
     const float inv_samples = 1.0f / static_cast<float>(samples_per_pixel_);
     if (planes_.size() == 1 && samples_per_pixel_ == 1) {
-      // Fast path for the ceiling scenario.
+      // Fast path for the ceiling scenario: plane coordinates of all rays in single precision
+      // (vectorisable; texel coordinates stay below 1e4, so float resolves 1e-3 texel), then
+      // the texture lookups.
       const PreparedPlane& plane = planes_[0];
       const PlaneProjection& p = projections_[0];
+      const float dx = static_cast<float>(p.denominator.x());
+      const float dy = static_cast<float>(p.denominator.y());
+      const float dz = static_cast<float>(p.denominator.z());
+      const float ux = static_cast<float>(p.numerator_u.x());
+      const float uy = static_cast<float>(p.numerator_u.y());
+      const float uz = static_cast<float>(p.numerator_u.z());
+      const float vx = static_cast<float>(p.numerator_v.x());
+      const float vy = static_cast<float>(p.numerator_v.y());
+      const float vz = static_cast<float>(p.numerator_v.z());
+      const float h = static_cast<float>(p.h);
+      texel_u_.resize(pixel_count);
+      texel_v_.resize(pixel_count);
       for (std::size_t i = 0; i < pixel_count; ++i) {
-        const Eigen::Vector3d& d = rays_[i];
-        const double den = p.denominator.dot(d);
-        const double lambda = p.h / den;
-        float value = background_;
-        if (lambda > 0.0 && std::isfinite(lambda)) {
-          const double inv = 1.0 / den;
-          const double u = p.numerator_u.dot(d) * inv;
-          const double v = p.numerator_v.dot(d) * inv;
-          if (u >= 0.0 && v >= 0.0 && u <= plane.extent_u && v <= plane.extent_v) {
-            value = sampleTexture(plane, u, v);
-          }
-        }
-        intensity[i] = value;
+        const float x = ray_x_[i];
+        const float y = ray_y_[i];
+        const float den = dx * x + dy * y + dz;
+        const float inv = 1.0f / den;
+        const bool in_front = h * den > 0.0f;  // lambda = h / den > 0
+        texel_u_[i] = in_front ? (ux * x + uy * y + uz) * inv : -1.0f;
+        texel_v_[i] = (vx * x + vy * y + vz) * inv;
+      }
+      const auto extent_u = static_cast<float>(plane.extent_u);
+      const auto extent_v = static_cast<float>(plane.extent_v);
+      for (std::size_t i = 0; i < pixel_count; ++i) {
+        const float u = texel_u_[i];
+        const float v = texel_v_[i];
+        intensity[i] = (u >= 0.0f && v >= 0.0f && u <= extent_u && v <= extent_v)
+                           ? sampleTexture(plane, u, v)
+                           : background_;
       }
       return;
     }
@@ -242,7 +261,7 @@ class Renderer {
       const double v = p.numerator_v.dot(d) * inv;
       if (u >= 0.0 && v >= 0.0 && u <= planes_[k].extent_u && v <= planes_[k].extent_v) {
         best = lambda;
-        value = sampleTexture(planes_[k], u, v);
+        value = sampleTexture(planes_[k], static_cast<float>(u), static_cast<float>(v));
       }
     }
     return value;
@@ -252,6 +271,10 @@ class Renderer {
   float background_;
   int samples_per_pixel_ = 1;
   std::vector<Eigen::Vector3d> rays_;
+  std::vector<float> ray_x_;  // rays_ in single precision (z = 1) for the fast path
+  std::vector<float> ray_y_;
+  std::vector<float> texel_u_;  // per-pixel texel coordinates, fast path scratch
+  std::vector<float> texel_v_;
   std::vector<PreparedPlane> planes_;
   std::vector<PlaneProjection> projections_;
 };
