@@ -191,8 +191,26 @@ TrajectoryEvaluation evaluateTrajectory(const Trajectory& estimated, const Traje
   validateTrajectory(ground_truth, "ground-truth trajectory");
   validateConfig(config);
 
+  // Evenly spaced subset for the offset search (at least 100 poses, see the config).
+  Trajectory search_subset;
+  const std::size_t search_poses = std::max<std::size_t>(config.max_search_poses, 100);
+  const bool subsample = config.max_search_poses > 0 && estimated.size() > search_poses;
+  if (subsample) {
+    search_subset.reserve(search_poses);
+    const double stride =
+        static_cast<double>(estimated.size() - 1) / static_cast<double>(search_poses - 1);
+    for (std::size_t k = 0; k < search_poses; ++k) {
+      const std::size_t index =
+          std::min(static_cast<std::size_t>(std::llround(stride * static_cast<double>(k))),
+                   estimated.size() - 1);
+      if (search_subset.empty() || estimated[index].t_s > search_subset.back().t_s) {
+        search_subset.push_back(estimated[index]);
+      }
+    }
+  }
+  const Trajectory& search_estimate = subsample ? search_subset : estimated;
   const auto objective = [&](double offset) {
-    return fitAtOffset(estimated, ground_truth, offset, config).mean_squared_error;
+    return fitAtOffset(search_estimate, ground_truth, offset, config).mean_squared_error;
   };
 
   double best_offset = 0.0;

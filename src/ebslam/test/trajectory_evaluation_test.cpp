@@ -63,6 +63,15 @@ TEST(TrajectoryEvaluation, RecoversKnownRigidTransformAndTimeOffsetExactly) {
   EXPECT_LT(r.rotation_rmse_deg, 1e-5);
   EXPECT_EQ(r.errors.size(), estimate.size());
   EXPECT_EQ(r.estimated_poses, estimate.size());
+
+  // The offset search on a subset of the poses finds the same optimum.
+  TrajectoryEvaluationConfig subset;
+  subset.max_search_poses = 100;
+  ASSERT_GT(estimate.size(), 400u);
+  const TrajectoryEvaluation s = evaluateTrajectory(estimate, gt, subset);
+  EXPECT_NEAR(s.alignment.time_offset_s, known.offset, 1e-7);
+  EXPECT_LT(s.position_rmse_m, 1e-7);
+  EXPECT_EQ(s.errors.size(), estimate.size());
 }
 
 TEST(TrajectoryEvaluation, WithoutOffsetSearchTheErrorIsLarge) {

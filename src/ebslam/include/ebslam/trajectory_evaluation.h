@@ -51,6 +51,10 @@ struct TrajectoryEvaluationConfig {
   /// rotation error only; the position alignment does not depend on it.
   bool estimate_body_rotation = false;
   std::size_t min_pairs = 3;  ///< fewer associated poses => no alignment at that offset
+  /// The time-offset search evaluates an evenly spaced subset of at most this many estimated
+  /// poses (0 = all; values below 100 count as 100), so estimates with a pose per event stay
+  /// fast; the final alignment and all reported errors use every pose.
+  std::size_t max_search_poses = 5000;
 };
 
 /// The alignment of eq. 8.18 (plus the optional scale and body rotation).
