@@ -101,5 +101,19 @@ TEST(Trajectory, ReadsRealTumGroundTruth) {
   EXPECT_NO_THROW(validateTrajectory(trajectory));
 }
 
+// All six TUM ground-truth files read cleanly (repeated timestamps dropped) and validate.
+TEST(Trajectory, ReadsAllRealTumFiles) {
+  const fs::path dir = fs::path(EBSLAM_SHARED_DATA_DIR) / "tum-groundtruth";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << "shared data not found at " << dir;
+  for (const char* name : {"freiburg1_desk", "freiburg1_room", "freiburg1_xyz", "freiburg2_xyz",
+                           "freiburg2_pioneer_360", "freiburg2_pioneer_slam"}) {
+    const fs::path file = dir / ("rgbd_dataset_" + std::string(name) + "-groundtruth.txt");
+    Trajectory trajectory;
+    EXPECT_NO_THROW(trajectory = readTumTrajectory(file.string())) << file;
+    EXPECT_GT(trajectory.size(), 2000u) << file;
+    EXPECT_NO_THROW(validateTrajectory(trajectory)) << file;
+  }
+}
+
 }  // namespace
 }  // namespace ebslam
