@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -810,6 +811,60 @@ EventFileWriter::EventFileWriter(const std::string& path, const SensorSize& sens
   impl_->out.open(path, std::ios::binary | std::ios::trunc);
   if (!impl_->out) throw std::runtime_error("cannot create event file '" + path + "'");
   impl_->writeHeader();
+}
+
+EventFileWriter EventFileWriter::openForAppend(const std::string& path,
+                                               std::optional<SensorSize> sensor) {
+  EventReadOptions options;
+  options.sensor = sensor;
+  EventFileReader reader(path, options);
+  EventVector batch;
+  while (reader.next(batch, 1 << 16) > 0) {
+  }
+  if (reader.error()) {
+    throw std::runtime_error("cannot append to damaged event file '" + path +
+                             "': " + *reader.error());
+  }
+  const EventFileFormat format = reader.format();
+  const SensorSize file_sensor = reader.sensor();
+  if (format == EventFileFormat::kBinary && sensor &&
+      (sensor->width != file_sensor.width || sensor->height != file_sensor.height)) {
+    throw std::invalid_argument("openForAppend: sensor " + sensorText(*sensor) +
+                                " differs from the file's " + sensorText(file_sensor));
+  }
+  if (format == EventFileFormat::kText && !sensor) {
+    // Without a header the size was inferred from the events; later ones could lie outside.
+    std::ifstream in(path, std::ios::binary);
+    if (readPrefix(in, kDetectBytes).rfind(kTextHeaderPrefix, 0) != 0) {
+      throw std::invalid_argument("openForAppend: '" + path +
+                                  "' declares no sensor size; pass one");
+    }
+  }
+  EventFileWriter writer;
+  writer.impl_ = std::make_unique<Impl>();
+  Impl& impl = *writer.impl_;
+  impl.path = path;
+  impl.format = format;
+  impl.sensor = file_sensor;
+  impl.written = reader.eventsRead();
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw std::runtime_error("cannot stat event file '" + path + "': " + ec.message());
+  bool needs_newline = false;
+  if (format == EventFileFormat::kBinary) {
+    // A clean binary file ends with its 24-byte end marker; close() writes a new one.
+    std::filesystem::resize_file(path, size - kBlockHeaderBytes, ec);
+    if (ec) throw std::runtime_error("cannot truncate event file '" + path + "': " + ec.message());
+  } else if (size > 0) {
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(size - 1));
+    needs_newline = in.get() != '\n';
+  }
+  impl.out.open(path, std::ios::binary | std::ios::app);
+  if (!impl.out) throw std::runtime_error("cannot open event file '" + path + "' for appending");
+  if (needs_newline) impl.out.put('\n');
+  impl.checkStream();
+  return writer;
 }
 
 EventFileWriter::~EventFileWriter() {

@@ -379,6 +379,60 @@ TEST_F(EventIoTest, WriterThatNeverClosedLeavesARecoverableFile) {
   EXPECT_TRUE(std::equal(cut.events.begin(), cut.events.end(), events.begin()));
 }
 
+TEST_F(EventIoTest, AppendToExistingFiles) {
+  const SensorSize sensor{128, 128};
+  const EventVector events = randomEvents(9000, sensor, 9);
+  const EventVector first(events.begin(), events.begin() + 5000);
+  const EventVector second(events.begin() + 5000, events.end());
+  for (auto format :
+       {EventFileFormat::kBinary, EventFileFormat::kText, EventFileFormat::kRpgText}) {
+    const std::string p = path(std::string("append_") + toString(format));
+    writeEventFile(p, first, sensor, format);
+    {
+      EventFileWriter writer = EventFileWriter::openForAppend(
+          p,
+          format == EventFileFormat::kRpgText ? std::optional<SensorSize>(sensor) : std::nullopt);
+      EXPECT_EQ(writer.eventsWritten(), first.size());
+      writer.write(second);
+      writer.close();
+      EXPECT_EQ(writer.eventsWritten(), events.size());
+    }
+    EventReadOptions options;
+    options.sensor =
+        format == EventFileFormat::kRpgText ? std::optional<SensorSize>(sensor) : std::nullopt;
+    const EventReadResult r = readEventFile(p, options);
+    EXPECT_FALSE(r.error) << toString(format) << ": " << r.error.value_or("");
+    EXPECT_EQ(r.events, events) << toString(format);
+    EXPECT_EQ(r.sensor.width, 128u);
+  }
+  // Damaged files and mismatching sizes are refused.
+  const std::string bytes = readAll(path("append_binary"));
+  writeAll(path("cut.ebe"), bytes.substr(0, bytes.size() - 30));
+  EXPECT_THROW(EventFileWriter::openForAppend(path("cut.ebe")), std::runtime_error);
+  EXPECT_THROW(EventFileWriter::openForAppend(path("append_binary"), SensorSize{64, 64}),
+               std::invalid_argument);
+  writeAll(path("plain.txt"), "1 2 3 1\n");
+  EXPECT_THROW(EventFileWriter::openForAppend(path("plain.txt")), std::invalid_argument);
+  EXPECT_THROW(EventFileWriter::openForAppend(path("missing.ebe")), std::runtime_error);
+  // A text file without a final newline gets one before the appended events.
+  {
+    EventFileWriter writer = EventFileWriter::openForAppend(path("plain.txt"), SensorSize{8, 8});
+    writer.write(Event{5, 6, 7, false});
+    writer.close();
+  }
+  writeAll(path("plain2.txt"), "1 2 3 1");
+  {
+    EventFileWriter writer = EventFileWriter::openForAppend(path("plain2.txt"), SensorSize{8, 8});
+    writer.write(Event{5, 6, 7, false});
+    writer.close();
+  }
+  for (const char* name : {"plain.txt", "plain2.txt"}) {
+    const EventReadResult r = readEventFile(path(name));
+    EXPECT_FALSE(r.error);
+    EXPECT_EQ(r.events, (EventVector{{1, 2, 3, true}, {5, 6, 7, false}})) << name;
+  }
+}
+
 TEST_F(EventIoTest, MisuseAndMissingFilesThrow) {
   EXPECT_THROW(readEventFile(path("missing.ebe")), std::runtime_error);
   EXPECT_THROW(EventFileReader(path("missing.ebe")), std::runtime_error);

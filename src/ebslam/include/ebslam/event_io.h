@@ -141,6 +141,14 @@ class EventFileWriter {
   /// be created and std::invalid_argument for a sensor the format cannot hold.
   EventFileWriter(const std::string& path, const SensorSize& sensor,
                   EventFileFormat format = EventFileFormat::kBinary);
+  /// Opens an existing, undamaged event file to append to it (e.g. a recorder that restarts).
+  /// The format and sensor size come from the file; `sensor` is required for a kText file
+  /// without header and must match otherwise. The file is read once to validate and count it;
+  /// new events go after the existing ones (binary: the end marker is replaced on close()).
+  /// Throws std::runtime_error if the file cannot be opened or is damaged (the reader's message)
+  /// and std::invalid_argument for a sensor mismatch.
+  static EventFileWriter openForAppend(const std::string& path,
+                                       std::optional<SensorSize> sensor = std::nullopt);
   ~EventFileWriter();
   EventFileWriter(EventFileWriter&&) noexcept;
   EventFileWriter& operator=(EventFileWriter&&) noexcept;
@@ -157,6 +165,7 @@ class EventFileWriter {
   std::size_t eventsWritten() const;
 
  private:
+  EventFileWriter() = default;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
