@@ -45,18 +45,21 @@ void CameraModel::validate() const {
   if (!principal_point.allFinite() || !std::isfinite(kappa1) || !std::isfinite(kappa2)) {
     throw std::invalid_argument("CameraModel: principal point and distortion must be finite");
   }
-  // The distorted radius rd(r) = r (1 + k1 r + k2 r^2) must increase over every undistorted
-  // radius that reaches the sensor, otherwise undistort() is ambiguous. d rd / dr =
-  // 1 + 2 k1 r + 3 k2 r^2; check it on a fine grid up to a radius beyond the sensor corner.
-  const double r_max = 2.0 * maxSensorRadius(*this);
-  double reached = 0.0;
-  for (int i = 0; i <= 1000 && reached < maxSensorRadius(*this); ++i) {
+  // r L(r) = r (1 + k1 r + k2 r^2) must increase over the radii in use, otherwise its inverse
+  // is ambiguous: d (r L(r)) / dr = 1 + 2 k1 r + 3 k2 r^2 > 0 on a fine grid. Radii in use:
+  // eq. 6.3 maps undistorted radii until the image reaches the sensor corner; eq. 8.3 maps the
+  // sensor's own (distorted) radii.
+  const double sensor_radius = maxSensorRadius(*this);
+  const double r_max = 2.0 * sensor_radius;
+  for (int i = 0; i <= 1000; ++i) {
     const double r = r_max * i / 1000.0;
     if (1.0 + 2.0 * kappa1 * r + 3.0 * kappa2 * r * r <= 0.0) {
       throw std::invalid_argument(
           "CameraModel: radial distortion (kappa1, kappa2) is not monotonic inside the sensor");
     }
-    reached = r * distortionFactor(*this, r);
+    const double covered =
+        distortion_model == DistortionModel::kDistortEq63 ? r * distortionFactor(*this, r) : r;
+    if (covered >= sensor_radius) break;
   }
 }
 
@@ -69,38 +72,51 @@ std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p_cam
   return distort(undistorted);
 }
 
+namespace {
+
+// Solves r L(r) = target for r >= 0 by Newton's method from r = target; std::nullopt outside
+// the monotonic range of r L(r).
+std::optional<double> invertRadius(const CameraModel& camera, double target) {
+  if (target == 0.0 || (camera.kappa1 == 0.0 && camera.kappa2 == 0.0)) return target;
+  double r = target;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const double g = r * distortionFactor(camera, r) - target;
+    const double dg = 1.0 + 2.0 * camera.kappa1 * r + 3.0 * camera.kappa2 * r * r;
+    if (dg <= 0.0) return std::nullopt;
+    const double step = g / dg;
+    r -= step;
+    if (r < 0.0) return std::nullopt;
+    if (std::abs(step) < 1e-12 * (1.0 + target)) break;
+  }
+  if (std::abs(r * distortionFactor(camera, r) - target) > 1e-9 * (1.0 + target)) {
+    return std::nullopt;
+  }
+  return r;
+}
+
+}  // namespace
+
 Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& undistorted_px) const {
   const Eigen::Vector2d d = undistorted_px - principal_point;
-  return principal_point + d * distortionFactor(*this, d.norm());  // eq. 6.3
+  const double r = d.norm();
+  if (distortion_model == DistortionModel::kDistortEq63) {
+    return principal_point + d * distortionFactor(*this, r);  // eq. 6.3
+  }
+  const std::optional<double> rd = invertRadius(*this, r);  // inverse of eq. 8.3
+  if (!rd || r == 0.0) return undistorted_px;
+  return principal_point + d * (*rd / r);
 }
 
 std::optional<Eigen::Vector2d> CameraModel::undistort(const Eigen::Vector2d& distorted_px) const {
   const Eigen::Vector2d d = distorted_px - principal_point;
   const double rd = d.norm();
-  if (rd == 0.0 || (kappa1 == 0.0 && kappa2 == 0.0)) {
-    return distorted_px;
+  if (distortion_model == DistortionModel::kUndistortEq83) {
+    return principal_point + d * distortionFactor(*this, rd);  // eq. 8.3
   }
-  // Solve r (1 + k1 r + k2 r^2) = rd for r by Newton's method from r = rd.
-  double r = rd;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    const double g = r * distortionFactor(*this, r) - rd;
-    const double dg = 1.0 + 2.0 * kappa1 * r + 3.0 * kappa2 * r * r;
-    if (dg <= 0.0) {
-      return std::nullopt;
-    }
-    const double step = g / dg;
-    r -= step;
-    if (r < 0.0) {
-      return std::nullopt;
-    }
-    if (std::abs(step) < 1e-12 * (1.0 + rd)) {
-      break;
-    }
-  }
-  if (std::abs(r * distortionFactor(*this, r) - rd) > 1e-9 * (1.0 + rd)) {
-    return std::nullopt;
-  }
-  return principal_point + d * (r / rd);
+  const std::optional<double> r = invertRadius(*this, rd);  // inverse of eq. 6.3
+  if (!r) return std::nullopt;
+  if (rd == 0.0) return distorted_px;
+  return principal_point + d * (*r / rd);
 }
 
 std::optional<Eigen::Vector3d> CameraModel::backprojectRay(const Eigen::Vector2d& pixel) const {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "ebslam/camera_model.h"
 #include "ebslam/simulator.h"
@@ -74,6 +75,25 @@ TEST(CameraModel, ProjectAndBackprojectRoundTripWithDistortion) {
   EXPECT_NEAR(distorted.x() - camera.principal_point.x(), 50.0 * (1.0 - 4e-4 * 50 + 1e-6 * 2500),
               1e-12);
   EXPECT_FALSE(camera.project(Eigen::Vector3d(0.0, 0.0, -1.0)).has_value());
+}
+
+// Eq. 8.3 direction (as CeilingCamera): L applied to the event's own radius undistorts it.
+TEST(CameraModel, Eq83DistortionModelUndistortsWithThePolynomial) {
+  CameraModel camera;
+  camera.kappa1 = 5e-4;
+  camera.kappa2 = -1e-6;
+  camera.distortion_model = DistortionModel::kUndistortEq83;
+  ASSERT_NO_THROW(camera.validate());
+  const Eigen::Vector2d event(120.0, 20.0);
+  const Eigen::Vector2d d = event - camera.principal_point;
+  const double l = 1.0 + 5e-4 * d.norm() - 1e-6 * d.squaredNorm();
+  const auto ray = camera.backprojectRay(event);
+  ASSERT_TRUE(ray.has_value());
+  EXPECT_NEAR(ray->x(), l * d.x() / camera.focal_px, 1e-12);
+  EXPECT_NEAR(ray->y(), l * d.y() / camera.focal_px, 1e-12);
+  const auto pixel = camera.project(*ray);
+  ASSERT_TRUE(pixel.has_value());
+  EXPECT_NEAR((*pixel - event).norm(), 0.0, 1e-9);
 }
 
 TEST(CameraModel, ThesisFocalLengthAndTriggerDistance) {
@@ -167,6 +187,34 @@ TEST(EventSimulator, EventCountPerMetreMatchesEq66OnStripes) {
                 expected * 0.002);
     }
   }
+}
+
+// Eq. 6.6 vs eq. 6.8: on a statistically isotropic texture every pixel fires in proportion to
+// its image speed, so rotating by theta (pixel i moves theta r_i pixels) and translating by x
+// (every pixel moves x f / D pixels) give E_theta / theta : E_x / x = 0.38247 S : f / D, the
+// thesis' empirical constant for the mean distance of the square sensor's pixels from c.
+TEST(EventSimulator, RotationToTranslationEventRatioMatchesEq66AndEq68) {
+  SimulatorConfig config = noiselessConfig();
+  cv::Mat noise(800, 800, CV_32FC1);
+  cv::RNG rng(5);
+  rng.fill(noise, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(noise, noise, cv::Size(), 4.0, 4.0, cv::BORDER_REFLECT);
+  cv::normalize(noise, noise, 0.15, 0.85, cv::NORM_MINMAX);
+  const Scene scene = ceilingWith(noise, 0.01);
+  const EventSimulator simulator(config);
+  const double x = 0.3;
+  const double theta = 0.25;
+  const auto translation = static_cast<double>(
+      simulator.simulate(scene, straightPath(0.0, 0.0, x, 0.0, 0.0, 1.0), 0.0, 1.0).events.size());
+  const Trajectory turn = {se2ToFloorPose(0.0, 0.0, 0.0, 0.0),
+                           se2ToFloorPose(1.0, 0.0, 0.0, theta)};
+  const auto rotation =
+      static_cast<double>(simulator.simulate(scene, turn, 0.0, 1.0).events.size());
+  ASSERT_GT(translation, 10000.0);
+  const double d = kThesisCeilingHeightM;
+  const double expected_ratio = 0.38247 * config.camera.width / (config.camera.focal_px / d);
+  EXPECT_NEAR((rotation / theta) / (translation / x) / expected_ratio, 1.0, 0.05)
+      << "rotation " << rotation << " translation " << translation;
 }
 
 // Eq. 6.11: the number of events depends on the distance moved, not on the speed.

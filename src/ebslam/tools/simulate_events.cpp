@@ -152,6 +152,10 @@ int run(const Options& options, ebslam::SimulatorConfig config,
          << "principal_point_px: [" << config.camera.principal_point.x() << ", "
          << config.camera.principal_point.y() << "]\n"
          << "kappa: [" << config.camera.kappa1 << ", " << config.camera.kappa2 << "]\n"
+         << "distortion_model: "
+         << (config.camera.distortion_model == ebslam::DistortionModel::kDistortEq63 ? "eq6.3"
+                                                                                     : "eq8.3")
+         << "\n"
          << "seed: " << config.events.seed << "\n";
     if (!meta) throw std::runtime_error("cannot write " + options.map_prefix + ".yaml");
     std::printf("ceiling map: %dx%d pixels at %.3f m, origin (%.3f, %.3f) m -> %s_*.png\n",
@@ -218,6 +222,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--kappa2", config.camera.kappa2, "radial distortion, eq. 6.3 [1/pixel^2]")
       ->capture_default_str();
+  app.add_flag(
+      "--distortion-eq83",
+      [&config](std::int64_t) {
+        config.camera.distortion_model = ebslam::DistortionModel::kUndistortEq83;
+      },
+      "apply kappa1/kappa2 as in eq. 8.3 (polynomial undistorts event coordinates, as "
+      "CeilingCamera) instead of eq. 6.3");
   app.add_option("--groundtruth-rate", config.ground_truth_rate_hz,
                  "rate of the ground-truth poses [Hz]")
       ->capture_default_str();

@@ -14,10 +14,19 @@
 
 namespace ebslam {
 
+/// Which way the polynomial L(r) = 1 + kappa1 r + kappa2 r^2 of the thesis is applied. The
+/// thesis states it both ways: eq. 6.3 distorts (e = c + (e_u - c) L(|e_u - c|)), eq. 8.1/8.3
+/// undistort (e_u = c + (e - c) L(|e - c|), as in CeilingCamera). Same kappas, different lens.
+enum class DistortionModel {
+  kDistortEq63,    ///< L applied to the undistorted radius gives the distorted position
+  kUndistortEq83,  ///< L applied to the distorted (event) radius gives the undistorted position
+};
+
 /// Pinhole projection (eq. 6.1) followed by the two-parameter radial distortion of eq. 6.3:
 ///   e_u = c + f (p_x, p_y) / p_z                       (undistorted, eq. 6.1)
 ///   e   = c + (e_u - c) (1 + kappa1 r + kappa2 r^2),   r = |e_u - c| [pixels]   (eq. 6.3)
-/// kappa1 < 0 is barrel distortion. Event coordinates are distorted coordinates.
+/// kappa1 < 0 is barrel distortion. Event coordinates are distorted coordinates. With
+/// DistortionModel::kUndistortEq83 the polynomial maps the other way (eq. 8.3).
 struct CameraModel {
   int width = 128;   ///< sensor columns [pixels], S for the eDVS
   int height = 128;  ///< sensor rows [pixels]
@@ -27,6 +36,7 @@ struct CameraModel {
   Eigen::Vector2d principal_point{63.5, 63.5};  ///< c [pixels], sensor centre by default
   double kappa1 = 0.0;  ///< linear radial distortion coefficient [1/pixel] (eq. 6.3)
   double kappa2 = 0.0;  ///< quadratic radial distortion coefficient [1/pixel^2] (eq. 6.3)
+  DistortionModel distortion_model = DistortionModel::kDistortEq63;
 
   /// Focal length from the full opening angle alpha_fov [rad] with eq. 6.2 as printed,
   /// f = S / tan(alpha_fov / 2). (The usual pinhole relation is (S / 2) / tan(alpha_fov / 2);
@@ -47,10 +57,11 @@ struct CameraModel {
   /// sensor; see isInside().
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_camera) const;
 
-  /// Undistorted -> distorted pixel coordinates (eq. 6.3).
+  /// Undistorted -> distorted pixel coordinates (eq. 6.3; Newton inverse of eq. 8.3).
+  /// Returns the input unchanged if no monotonic solution exists (far outside the sensor).
   Eigen::Vector2d distort(const Eigen::Vector2d& undistorted_px) const;
   /// Distorted -> undistorted pixel coordinates: inverse of eq. 6.3 by Newton iteration on the
-  /// radius. std::nullopt if the radius is beyond the monotonic range of the distortion.
+  /// radius (eq. 8.3 directly). std::nullopt if the radius is beyond the monotonic range.
   std::optional<Eigen::Vector2d> undistort(const Eigen::Vector2d& distorted_px) const;
 
   /// Direction of the viewing ray through a (distorted) pixel position in the camera frame,
