@@ -1,0 +1,266 @@
+#pragma once
+
+// eDVS4337 serial protocol: command builder, event formats, incremental parser with resync and
+// 64-bit timestamp unwrapping. ROS-free; depends only on ebslam/event.h.
+//
+// Wire format of one event (eDVS4337 firmware manual, public drivers):
+//   byte 0: 1yyyyyyy   (top bit set: start of an event; y = row 0..127)
+//   byte 1: pxxxxxxx   (p = polarity bit, x = column 0..127)
+//   then, depending on the selected format:
+//     kNone     nothing
+//     kDelta    1..4 bytes of 7 bits each, most significant group first; the last byte has its
+//               top bit set: microseconds since the previous event
+//     kAbs16    big-endian 16-bit device time [us], wraps every 65.536 ms
+//     kAbs24    big-endian 24-bit device time [us], wraps every 16.78 s
+//     kAbs32    big-endian 32-bit device time [us], wraps every 71.6 min
+//
+// Polarity convention of this driver: p = 1 is ON (brightness increased), p = 0 is OFF, the
+// same bit-to-value mapping as edvstools (the thesis author's driver, which copies the bit into
+// its `parity` field). Other public drivers read the bit the other way round; a sensor whose
+// polarities come out swapped is handled by ParserConfig::on_bit = 0.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ebslam/event.h"
+
+namespace edvs_driver {
+
+/// What follows the two address bytes of an event on the wire.
+enum class EventFormat { kNone, kDelta, kAbs16, kAbs24, kAbs32 };
+
+/// Firmware generation. Older firmware numbers the timestamp formats one lower:
+///   current: !E0 none, !E1 delta, !E2 16 bit, !E3 24 bit, !E4 32 bit
+///   legacy:  !E0 none, !E1 16 bit, !E2 24 bit, !E3 32 bit (no delta format)
+enum class Firmware { kCurrent, kLegacy };
+
+/// All five formats, in command-number order of the current firmware.
+inline constexpr EventFormat kAllEventFormats[] = {EventFormat::kNone, EventFormat::kDelta,
+                                                   EventFormat::kAbs16, EventFormat::kAbs24,
+                                                   EventFormat::kAbs32};
+
+/// Short name: "none", "delta", "ts16", "ts24", "ts32".
+const char* toString(EventFormat format);
+const char* toString(Firmware firmware);
+/// Parses "current"/"legacy"; std::nullopt otherwise.
+std::optional<Firmware> parseFirmware(std::string_view name);
+
+/// Parses a format given either as the command the firmware understands ("E0".."E4", also
+/// "!E2", "2") interpreted for `firmware`, or as a name ("none", "delta", "ts16", "ts24",
+/// "ts32"). Returns std::nullopt for anything else and for a number the firmware does not have.
+std::optional<EventFormat> parseEventFormat(std::string_view text, Firmware firmware);
+
+/// The number n of the `!En` command that selects `format` on `firmware`.
+/// Throws std::invalid_argument for kDelta on legacy firmware (it has no such format).
+int formatCommandNumber(EventFormat format, Firmware firmware);
+
+/// The format that `!En` selects on `firmware`; std::nullopt for an unknown n.
+std::optional<EventFormat> formatFromCommandNumber(int n, Firmware firmware);
+
+/// Number of timestamp bytes after the address bytes (kDelta: the maximum, 4).
+int timestampBytes(EventFormat format);
+/// Wrap period of an absolute timestamp format [us]; 0 for kNone and kDelta.
+std::int64_t wrapPeriodUs(EventFormat format);
+/// Bytes of one event on the wire (kDelta: the minimum, 3).
+int minEventBytes(EventFormat format);
+
+/// Master/slave timestamp synchronisation of two sensors wired together: the master drives
+/// the slave's timestamp clock, so both report the same device time.
+enum class SyncMode { kNone, kMaster, kSlave };
+const char* toString(SyncMode mode);
+std::optional<SyncMode> parseSyncMode(std::string_view name);
+
+/// Builders for the ASCII command lines. Every command ends in '\n'; send each in its own write.
+namespace commands {
+std::string reset();           ///< "R\n": reset; the device prints a banner
+std::string echoOff();         ///< "!U0\n"
+std::string startStreaming();  ///< "E+\n"
+std::string stopStreaming();   ///< "E-\n"
+std::string eventFormat(EventFormat format, Firmware firmware);  ///< "!E<n>\n"
+std::string timestampReset();                                    ///< "!ET0\n"
+std::string masterRun();   ///< "!ETM+\n": master starts its clock and the slave's
+std::string masterStop();  ///< "!ETM0\n": master armed, clock stopped
+std::string slave();       ///< "!ETS\n": take the timestamp clock from the master
+std::string help();        ///< "??\n"
+/// "!B<index>=<value>\n": set one bias register. Throws std::invalid_argument for index outside
+/// 0..11 or a negative value or one above 2^24-1 (the bias generator's 24-bit range).
+std::string setBias(int index, std::int64_t value);
+std::string flushBiases();  ///< "!BF\n": send the bias registers to the chip
+}  // namespace commands
+
+/// Number of bias registers of the DVS128 chip on the eDVS and their names, index order.
+inline constexpr int kNumBiases = 12;
+const char* biasName(int index);
+/// Index of a bias by its name (case-insensitive, e.g. "cas", "diffOn"); std::nullopt if unknown.
+std::optional<int> biasIndex(std::string_view name);
+
+/// True if `text` contains one of the banners an eDVS prints after reset
+/// ("EDVS-4337" or "meDVS128").
+bool containsBanner(std::string_view text);
+
+/// Parser settings.
+struct ParserConfig {
+  EventFormat format = EventFormat::kAbs16;
+  /// Value of the p bit that means ON (see the polarity convention above).
+  int on_bit = 1;
+  /// Sensor size [pixels]: events outside are dropped as corrupt (the eDVS is 128 x 128, so
+  /// with 7-bit coordinates nothing can fall outside unless a smaller size is configured).
+  ebslam::SensorSize sensor{128, 128};
+  /// A device time advance this much larger than the host time that passed between the
+  /// reads that delivered two consecutive events is counted as an implausible jump [us]
+  /// (a symptom of a wrong format). Covers host read scheduling and USB latency.
+  std::int64_t jump_tolerance_us = 50000;
+  /// When host time is known, an event with an implausible jump is treated as a framing error
+  /// (garbage that happens to look like an event, or a mis-aligned frame): its first byte is
+  /// dropped and parsing resumes at the next byte. After this many rejections in a row the
+  /// device clock is taken to have jumped (e.g. a timestamp reset) and the stream is accepted
+  /// again, continuing monotonically from the last accepted time.
+  bool reject_implausible = true;
+  int max_consecutive_rejections = 8;
+};
+
+/// Counters of one parser. All counts since construction or reset().
+struct ParserStats {
+  std::uint64_t bytes_in = 0;              ///< bytes fed
+  std::uint64_t bytes_dropped = 0;         ///< bytes discarded while resynchronising
+  std::uint64_t resyncs = 0;               ///< times the parser lost and regained the event framing
+  std::uint64_t events = 0;                ///< events emitted
+  std::uint64_t wraps = 0;                 ///< timestamp wrap-arounds unwrapped
+  std::uint64_t wraps_from_host_time = 0;  ///< extra whole wrap periods inferred from host time
+  std::uint64_t implausible_jumps = 0;     ///< see ParserConfig::jump_tolerance_us
+  std::uint64_t rejected_events = 0;       ///< implausible events dropped as framing errors
+  std::uint64_t clock_jumps = 0;           ///< device clock discontinuities accepted
+};
+
+/// Unwraps an N-bit device clock to 64-bit microseconds that never run backwards.
+///
+/// Each raw value is taken as the smallest forward step from the previous one (modulo the wrap
+/// period). A gap longer than one wrap period cannot be seen in the raw values; when the host
+/// time at which the bytes arrived is known, whole periods that must have passed are added back
+/// (host elapsed time minus device step, rounded to whole periods).
+class TimestampUnwrapper {
+ public:
+  /// period_us: wrap period (2^bits) [us]; 0 means the input is already a 64-bit time.
+  /// delta: raw values are deltas to add (kDelta format) instead of clock readings.
+  explicit TimestampUnwrapper(std::int64_t period_us = 0, bool delta = false)
+      : period_us_(period_us), delta_(delta) {}
+
+  /// raw_us: device time as sent (kDelta: the delta); host_us: host receive time [us] of the
+  /// bytes or std::nullopt when unknown. Returns the unwrapped time.
+  std::int64_t unwrap(std::int64_t raw_us, std::optional<std::int64_t> host_us);
+
+  /// The two halves of unwrap(): the forward step [us] that `raw_us` would add (including whole
+  /// periods inferred from host time) and the host time elapsed since the last committed value
+  /// (-1 if unknown), without changing any state...
+  struct Step {
+    std::int64_t step_us = 0;
+    std::int64_t host_elapsed_us = -1;
+    std::uint64_t wraps = 0;
+    std::uint64_t wraps_from_host = 0;
+  };
+  Step peek(std::int64_t raw_us, std::optional<std::int64_t> host_us) const;
+  /// ...and accepting it.
+  std::int64_t commit(std::int64_t raw_us, std::optional<std::int64_t> host_us, const Step& step);
+
+  bool started() const { return started_; }
+  std::int64_t last() const { return last_unwrapped_; }
+  std::uint64_t wraps() const { return wraps_; }
+  std::uint64_t wrapsFromHostTime() const { return wraps_from_host_; }
+  void reset();
+
+ private:
+  std::int64_t period_us_;
+  bool delta_;
+  bool started_ = false;
+  std::int64_t last_raw_ = 0;
+  std::int64_t last_unwrapped_ = 0;
+  std::optional<std::int64_t> last_host_us_;
+  std::uint64_t wraps_ = 0;
+  std::uint64_t wraps_from_host_ = 0;
+};
+
+/// Incremental parser of the eDVS event stream.
+///
+/// feed() accepts the bytes of each read as they come; an event split across reads is kept
+/// until its last byte arrives, so no event is ever split or shifted. A byte where the start
+/// of an event is expected whose top bit is clear (text, line noise, a lost byte) is dropped and
+/// counted; parsing resumes at the next byte with the top bit set. Timestamps are unwrapped to
+/// 64-bit device microseconds that never run backwards. For kNone (no device timestamps) the
+/// event time is the host receive time passed to feed(), clamped so it never runs backwards.
+class EventParser {
+ public:
+  explicit EventParser(const ParserConfig& config = {});
+
+  /// Parses `size` bytes, appending complete events to `out`. host_us is the host time [us]
+  /// at which these bytes were read (any monotonic clock), or std::nullopt. Returns the
+  /// number of events appended.
+  std::size_t feed(const std::uint8_t* data, std::size_t size, std::optional<std::int64_t> host_us,
+                   ebslam::EventVector& out);
+  std::size_t feed(const std::vector<std::uint8_t>& bytes, std::optional<std::int64_t> host_us,
+                   ebslam::EventVector& out) {
+    return feed(bytes.data(), bytes.size(), host_us, out);
+  }
+
+  /// Forgets a partial event and the timestamp history (e.g. after a reconnect or a format
+  /// change); counters are kept. Pass a config to change the format.
+  void restart();
+  void restart(const ParserConfig& config);
+  /// Clears the counters as well.
+  void reset();
+
+  const ParserConfig& config() const { return config_; }
+  const ParserStats& stats() const { return stats_; }
+  /// Bytes of an incomplete event held back, waiting for the next feed().
+  std::size_t pendingBytes() const { return pending_; }
+
+  /// True when the stream does not look like `config().format`: after at least
+  /// `min_events` events, more than `max_ratio` of the bytes were dropped or of the events
+  /// had implausible timestamp jumps.
+  bool formatSuspect(std::uint64_t min_events = 200, double max_ratio = 0.05) const;
+
+ private:
+  // Emits the complete event in frame_; returns false if it was rejected (framing error).
+  bool emit(std::int64_t raw_time, std::optional<std::int64_t> host_us, ebslam::EventVector& out);
+  // Drops the first byte of the rejected frame and parses the rest again.
+  void refeedAfterReject(std::optional<std::int64_t> host_us, ebslam::EventVector& out);
+
+  ParserConfig config_;
+  ParserStats stats_;
+  TimestampUnwrapper unwrapper_;
+  // Current partial event: state = number of bytes of it seen so far (0 = expecting start).
+  std::size_t pending_ = 0;
+  std::uint8_t frame_[6] = {};  // bytes of the current event so far
+  int consecutive_rejections_ = 0;
+  std::uint32_t ts_accum_ = 0;
+  bool in_garbage_ = false;           // inside a run of dropped bytes (one resync per run)
+  std::int64_t host_time_floor_ = 0;  // kNone: last emitted time
+  bool any_host_time_ = false;
+};
+
+/// Result of guessing the format of a captured byte stream.
+struct FormatGuess {
+  EventFormat format = EventFormat::kNone;
+  double score = 0.0;  ///< fraction of dropped bytes plus fraction of implausible jumps
+  std::uint64_t events = 0;
+};
+
+/// Parses `bytes` (without host times) with every format and returns the one that explains
+/// them best: fewest dropped bytes and implausible timestamp jumps; ties go to the format with
+/// more timestamp information. Used to check a stream against the announced format.
+FormatGuess guessEventFormat(const std::vector<std::uint8_t>& bytes);
+
+/// Encodes events in `format` (the device side, used by the emulator and tests). For the
+/// absolute formats the times are taken modulo the wrap period; for kDelta the difference to
+/// the previous event (the first relative to `previous_us`) must fit in 28 bits.
+/// Throws std::invalid_argument for a coordinate above 127, a time running backwards or a delta
+/// too large.
+void encodeEvent(const ebslam::Event& event, EventFormat format, std::int64_t previous_us,
+                 int on_bit, std::vector<std::uint8_t>& out);
+std::vector<std::uint8_t> encodeEvents(const ebslam::EventVector& events, EventFormat format,
+                                       int on_bit = 1);
+
+}  // namespace edvs_driver

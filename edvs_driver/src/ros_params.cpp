@@ -1,0 +1,85 @@
+#include "edvs_driver/ros_params.h"
+
+#include <stdexcept>
+
+namespace edvs_driver {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& name, const std::string& why) {
+  throw std::invalid_argument("parameter ~" + name + ": " + why);
+}
+
+}  // namespace
+
+void validate(const DriverParams& p) {
+  if (p.frame_id.empty()) bad("frame_id", "must not be empty");
+  if (p.publish_rate_hz < 0) bad("publish_rate", "must be >= 0 Hz");
+  if (p.batch_size < 0) bad("batch_size", "must be >= 0 events");
+  if (p.publish_rate_hz == 0 && p.batch_size == 0) {
+    bad("publish_rate", "publish_rate and batch_size are both 0: nothing would be published");
+  }
+  if (p.reconnect_min_s <= 0) bad("reconnect_min_delay", "must be > 0 s");
+  if (p.reconnect_max_s < p.reconnect_min_s) bad("reconnect_max_delay", "must be >= the minimum");
+  if (p.stall_warn_s <= 0) bad("stall_timeout", "must be > 0 s");
+  if (p.stall_reconnect_s < p.stall_warn_s)
+    bad("stall_reconnect_timeout", "must be >= stall_timeout");
+  if (p.device.on_bit != 0 && p.device.on_bit != 1) bad("on_bit", "must be 0 or 1");
+  if (p.device.banner_timeout_ms <= 0) bad("banner_timeout", "must be > 0 ms");
+  for (int i = 0; i < kNumBiases; ++i) {
+    const auto& v = p.biases[static_cast<std::size_t>(i)];
+    if (v && (*v < 0 || *v > 0xFFFFFF)) {
+      bad(std::string("bias_") + biasName(i), "must be -1 (keep) or 0..16777215");
+    }
+  }
+}
+
+DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
+  DriverParams p;
+  p.device.uri = pnh.param<std::string>("uri", p.device.uri);
+  const std::string firmware = pnh.param<std::string>("firmware", "current");
+  const auto fw = parseFirmware(firmware);
+  if (!fw) bad("firmware", "'" + firmware + "' is not current or legacy");
+  p.device.firmware = *fw;
+  const std::string format = pnh.param<std::string>("format", "E2");
+  const auto f = parseEventFormat(format, p.device.firmware);
+  if (!f) bad("format", "'" + format + "' is not E0..E4 or none/delta/ts16/ts24/ts32");
+  p.device.format = *f;
+  const std::string sync = pnh.param<std::string>("sync_mode", "none");
+  const auto s = parseSyncMode(sync);
+  if (!s) bad("sync_mode", "'" + sync + "' is not none, master or slave");
+  p.device.sync = *s;
+  p.device.on_bit = pnh.param("on_bit", p.device.on_bit);
+  p.device.banner_timeout_ms = pnh.param("banner_timeout", p.device.banner_timeout_ms);
+  p.device.command_gap_ms = pnh.param("command_gap", p.device.command_gap_ms);
+  if (p.device.command_gap_ms < 0) bad("command_gap", "must be >= 0 ms");
+  p.frame_id = pnh.param<std::string>("frame_id", p.frame_id);
+  p.camera_name = pnh.param<std::string>("camera_name", p.camera_name);
+  p.camera_info_url = pnh.param<std::string>("camera_info_url", p.camera_info_url);
+  p.publish_rate_hz = pnh.param("publish_rate", p.publish_rate_hz);
+  p.batch_size = pnh.param("batch_size", p.batch_size);
+  p.reconnect_min_s = pnh.param("reconnect_min_delay", p.reconnect_min_s);
+  p.reconnect_max_s = pnh.param("reconnect_max_delay", p.reconnect_max_s);
+  p.stall_warn_s = pnh.param("stall_timeout", p.stall_warn_s);
+  p.stall_reconnect_s = pnh.param("stall_reconnect_timeout", p.stall_reconnect_s);
+  for (int i = 0; i < kNumBiases; ++i) {
+    const int v = pnh.param(std::string("bias_") + biasName(i), -1);
+    if (v >= 0) p.biases[static_cast<std::size_t>(i)] = v;
+  }
+  // The URI is parsed here too, so a typo fails at start-up with the parameter's name; its
+  // format= and firmware= override ~format and ~firmware.
+  try {
+    const DeviceUri uri = parseDeviceUri(p.device.uri);
+    if (p.device.uri.find("firmware=") != std::string::npos) p.device.firmware = uri.firmware;
+    if (uri.format) p.device.format = *uri.format;
+    EdvsDevice probe(p.device, [](const DeviceUri&) -> std::unique_ptr<Transport> {
+      throw std::logic_error("not opened");
+    });
+  } catch (const std::invalid_argument& e) {
+    bad("uri", e.what());
+  }
+  validate(p);
+  return p;
+}
+
+}  // namespace edvs_driver
