@@ -143,7 +143,9 @@ bool parseSecondsToMicroseconds(std::string_view token, std::int64_t& t_us) {
   std::string_view fraction =
       dot == std::string_view::npos ? std::string_view() : token.substr(dot + 1);
   if (integer_part.empty() && fraction.empty()) return false;
-  std::int64_t seconds = 0;
+  // Magnitude in unsigned microseconds with overflow checks, so the whole int64 range
+  // (including -2^63 us, which the writers emit as "-9223372036854.775808") round-trips.
+  std::uint64_t seconds = 0;
   if (!integer_part.empty()) {
     for (char c : integer_part) {
       if (c < '0' || c > '9') return false;
@@ -153,15 +155,16 @@ bool parseSecondsToMicroseconds(std::string_view token, std::int64_t& t_us) {
   for (char c : fraction) {
     if (c < '0' || c > '9') return false;
   }
-  std::int64_t micros = 0;
+  std::uint64_t micros = 0;
   for (std::size_t i = 0; i < 6; ++i) {
-    micros = micros * 10 + (i < fraction.size() ? fraction[i] - '0' : 0);
+    micros = micros * 10 + static_cast<std::uint64_t>(i < fraction.size() ? fraction[i] - '0' : 0);
   }
   if (fraction.size() > 6 && fraction[6] >= '5') ++micros;  // round half up
-  constexpr std::int64_t kMaxSeconds = std::numeric_limits<std::int64_t>::max() / 1000000 - 1;
-  if (seconds > kMaxSeconds) return false;
-  t_us = seconds * 1000000 + micros;
-  if (negative) t_us = -t_us;
+  constexpr std::uint64_t kLimit = std::uint64_t{1} << 63;  // |int64 min|
+  if (seconds > kLimit / 1000000) return false;
+  const std::uint64_t magnitude = seconds * 1000000 + micros;
+  if (magnitude > kLimit || (!negative && magnitude == kLimit)) return false;
+  t_us = negative ? static_cast<std::int64_t>(0 - magnitude) : static_cast<std::int64_t>(magnitude);
   return true;
 }
 

@@ -92,11 +92,23 @@ TEST_F(EventIoTest, BinaryHandlesLargeTimeJumpsAndExtremeValues) {
                         {std::numeric_limits<std::int64_t>::max(), 3, 4, false},
                         {std::numeric_limits<std::int64_t>::min(), 5, 6, true},
                         {(std::int64_t{1} << 40) - 3, 7, 8, false}};
-  writeEventFile(path("b.ebe"), events, sensor);
-  const EventReadResult result = readEventFile(path("b.ebe"));
-  EXPECT_FALSE(result.error);
-  EXPECT_EQ(result.events, events);
-  EXPECT_EQ(result.non_monotonic, 2u);  // -5 after 0 and min after max
+  // All formats, including decimal seconds at the ends of the int64 range (found by fuzzing).
+  for (auto format :
+       {EventFileFormat::kBinary, EventFileFormat::kText, EventFileFormat::kRpgText}) {
+    const std::string p = path(std::string("b_") + toString(format));
+    writeEventFile(p, events, sensor, format);
+    EventReadOptions options;
+    options.format = format;
+    if (format == EventFileFormat::kRpgText) options.sensor = sensor;
+    const EventReadResult result = readEventFile(p, options);
+    EXPECT_FALSE(result.error) << toString(format) << ": " << result.error.value_or("");
+    EXPECT_EQ(result.events, events) << toString(format);
+    EXPECT_EQ(result.non_monotonic, 2u);  // -5 after 0 and min after max
+  }
+  // One microsecond beyond the range is a bad timestamp, not a wrap-around.
+  const auto r = readBytes("9223372036854.775808 1 1 1\n", EventFileFormat::kRpgText);
+  ASSERT_TRUE(r.error);
+  EXPECT_NE(r.error->find("bad timestamp"), std::string::npos);
 }
 
 TEST_F(EventIoTest, TextAndRpgRoundTrip) {
