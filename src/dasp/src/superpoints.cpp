@@ -13,6 +13,19 @@ namespace {
 constexpr double kPiD = 3.14159265358979323846;
 }  // namespace
 
+namespace {
+
+// Union-find over label runs with path halving.
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+}  // namespace
+
 int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
                         double min_weight) {
   if (labels.type() != CV_32SC1 || !labels.isContinuous()) {
@@ -30,55 +43,84 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   }
   const int width = labels.cols;
   const int height = labels.rows;
-  const std::size_t n = labels.total();
-  const float* pixel_weight = weight.empty() ? nullptr : weight.ptr<float>();
   int* label = labels.ptr<int>();
   const std::uint8_t* ok = valid.empty() ? nullptr : valid.ptr<std::uint8_t>();
-  const auto usable = [&](std::size_t i) { return ok == nullptr || ok[i] != 0; };
+  const float* pixel_weight = weight.empty() ? nullptr : weight.ptr<float>();
 
-  // Connected components (4-neighbourhood) of equal label over usable pixels; unlabelled usable
-  // pixels (-1) form components too, which are then merged like stray pieces.
-  std::vector<int> component(n, -1);
-  std::vector<int> pixels;  // pixel indices grouped by component
-  pixels.reserve(n);
-  std::vector<int> start;  // component c: pixels[start[c] .. start[c + 1])
-  std::vector<int> component_label;
-  for (std::size_t seed = 0; seed < n; ++seed) {
-    if (component[seed] >= 0 || !usable(seed)) continue;
-    const int c = static_cast<int>(start.size());
-    const int value = label[seed];
-    start.push_back(static_cast<int>(pixels.size()));
-    component_label.push_back(value);
-    component[seed] = c;
-    pixels.push_back(static_cast<int>(seed));
-    for (std::size_t head = static_cast<std::size_t>(start.back()); head < pixels.size(); ++head) {
-      const int i = pixels[head];
-      const int x = i % width;
-      const int y = i / width;
-      const int neighbours[4] = {x > 0 ? i - 1 : -1, x + 1 < width ? i + 1 : -1,
-                                 y > 0 ? i - width : -1, y + 1 < height ? i + width : -1};
-      for (int j : neighbours) {
-        if (j < 0) continue;
-        const auto uj = static_cast<std::size_t>(j);
-        if (component[uj] >= 0 || !usable(uj) || label[uj] != value) continue;
-        component[uj] = c;
-        pixels.push_back(j);
+  // Horizontal runs of equal label over usable pixels; unlabelled usable pixels (-1) form runs
+  // too, which are then merged like stray pieces.
+  struct Run {
+    int row, begin, end, label;
+  };
+  std::vector<Run> runs;
+  runs.reserve(static_cast<std::size_t>(height) * 32);
+  std::vector<int> row_first(static_cast<std::size_t>(height) + 1, 0);
+  std::vector<int> run_of_pixel(labels.total(), -1);
+  for (int row = 0; row < height; ++row) {
+    row_first[static_cast<std::size_t>(row)] = static_cast<int>(runs.size());
+    const std::size_t base = static_cast<std::size_t>(row) * width;
+    int col = 0;
+    while (col < width) {
+      if (ok != nullptr && !ok[base + col]) {
+        ++col;
+        continue;
+      }
+      const int value = label[base + col];
+      int end = col + 1;
+      while (end < width && (ok == nullptr || ok[base + end]) && label[base + end] == value) ++end;
+      const int id = static_cast<int>(runs.size());
+      runs.push_back({row, col, end, value});
+      std::fill(run_of_pixel.begin() + static_cast<std::ptrdiff_t>(base + col),
+                run_of_pixel.begin() + static_cast<std::ptrdiff_t>(base + end), id);
+      col = end;
+    }
+  }
+  row_first[static_cast<std::size_t>(height)] = static_cast<int>(runs.size());
+  const int run_count = static_cast<int>(runs.size());
+
+  // Connect runs of equal label that overlap in consecutive rows (4-neighbourhood).
+  std::vector<int> parent(static_cast<std::size_t>(run_count));
+  for (int r = 0; r < run_count; ++r) parent[r] = r;
+  for (int row = 1; row < height; ++row) {
+    int q = row_first[row - 1];
+    const int q_end = row_first[row];
+    for (int r = row_first[row]; r < row_first[row + 1]; ++r) {
+      while (q < q_end && runs[q].end <= runs[r].begin) ++q;
+      for (int p = q; p < q_end && runs[p].begin < runs[r].end; ++p) {
+        if (runs[p].label != runs[r].label) continue;
+        const int a = findRoot(parent, p), b = findRoot(parent, r);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
       }
     }
   }
-  const int component_count = static_cast<int>(start.size());
-  start.push_back(static_cast<int>(pixels.size()));
-  const auto size_of = [&](int c) { return start[c + 1] - start[c]; };
-  std::vector<double> component_weight(static_cast<std::size_t>(component_count), 0.0);
-  for (int c = 0; c < component_count; ++c) {
-    if (pixel_weight == nullptr) {
-      component_weight[c] = size_of(c);
-      continue;
+  // Components, their pixel weight and their runs (bucketed by component).
+  std::vector<int> component_of_run(static_cast<std::size_t>(run_count));
+  std::vector<int> component_of_root(static_cast<std::size_t>(run_count), -1);
+  std::vector<int> component_label;
+  std::vector<double> component_weight;
+  std::vector<int> component_size;
+  for (int r = 0; r < run_count; ++r) {
+    const int root = findRoot(parent, r);
+    int& c = component_of_root[root];
+    if (c < 0) {
+      c = static_cast<int>(component_label.size());
+      component_label.push_back(runs[r].label);
+      component_weight.push_back(0.0);
+      component_size.push_back(0);
     }
-    double sum = 0.0;
-    for (int p = start[c]; p < start[c + 1]; ++p) sum += pixel_weight[pixels[p]];
-    component_weight[c] = sum;
+    component_of_run[r] = c;
+    const Run& run = runs[r];
+    component_size[c] += run.end - run.begin;
+    if (pixel_weight == nullptr) {
+      component_weight[c] += run.end - run.begin;
+    } else {
+      const float* w = pixel_weight + static_cast<std::size_t>(run.row) * width;
+      float sum = 0.0f;
+      for (int x = run.begin; x < run.end; ++x) sum += w[x];
+      component_weight[c] += sum;
+    }
   }
+  const int component_count = static_cast<int>(component_label.size());
 
   // The largest piece of each label keeps it.
   int max_label = -1;
@@ -88,7 +130,7 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     const int value = component_label[c];
     if (value < 0) continue;
     int& best = largest[static_cast<std::size_t>(value)];
-    if (best < 0 || size_of(c) > size_of(best)) best = c;
+    if (best < 0 || component_size[c] > component_size[best]) best = c;
   }
   constexpr int kUnresolved = -2;
   std::vector<int> final_label(static_cast<std::size_t>(component_count), kUnresolved);
@@ -98,34 +140,53 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   }
   int next_new_label = max_label + 1;
 
+  // Runs of the unresolved components, grouped by component.
+  std::vector<int> stray_start(static_cast<std::size_t>(component_count) + 1, 0);
+  for (int r = 0; r < run_count; ++r) {
+    if (final_label[component_of_run[r]] == kUnresolved) ++stray_start[component_of_run[r] + 1];
+  }
+  for (int c = 0; c < component_count; ++c) stray_start[c + 1] += stray_start[c];
+  std::vector<int> stray_runs(static_cast<std::size_t>(stray_start[component_count]));
+  {
+    std::vector<int> fill(stray_start.begin(), stray_start.end() - 1);
+    for (int r = 0; r < run_count; ++r) {
+      const int c = component_of_run[r];
+      if (final_label[c] == kUnresolved) stray_runs[fill[c]++] = r;
+    }
+  }
+
   // Stray pieces join the resolved neighbour with the longest shared border; repeat while
   // pieces that only touch other stray pieces get resolved through them.
   std::vector<std::pair<int, int>> border;  // (label, border length)
+  const auto tally = [&](int c, std::size_t pixel) {
+    const int r = run_of_pixel[pixel];
+    if (r < 0) return;
+    const int other = component_of_run[r];
+    if (other == c) return;
+    const int value = final_label[other];
+    if (value < 0) return;
+    auto it = std::find_if(border.begin(), border.end(),
+                           [value](const auto& entry) { return entry.first == value; });
+    if (it == border.end()) {
+      border.push_back({value, 1});
+    } else {
+      ++it->second;
+    }
+  };
   bool changed = true;
   while (changed) {
     changed = false;
     for (int c = 0; c < component_count; ++c) {
       if (final_label[c] != kUnresolved) continue;
       border.clear();
-      for (int p = start[c]; p < start[c + 1]; ++p) {
-        const int i = pixels[p];
-        const int x = i % width;
-        const int y = i / width;
-        const int neighbours[4] = {x > 0 ? i - 1 : -1, x + 1 < width ? i + 1 : -1,
-                                   y > 0 ? i - width : -1, y + 1 < height ? i + width : -1};
-        for (int j : neighbours) {
-          if (j < 0) continue;
-          const int other = component[static_cast<std::size_t>(j)];
-          if (other < 0 || other == c) continue;
-          const int value = final_label[other];
-          if (value < 0) continue;
-          auto it = std::find_if(border.begin(), border.end(),
-                                 [value](const auto& entry) { return entry.first == value; });
-          if (it == border.end()) {
-            border.push_back({value, 1});
-          } else {
-            ++it->second;
-          }
+      for (int s = stray_start[c]; s < stray_start[c + 1]; ++s) {
+        const Run& run = runs[stray_runs[s]];
+        const std::size_t base = static_cast<std::size_t>(run.row) * width;
+        if (run.begin > 0) tally(c, base + run.begin - 1);
+        if (run.end < width) tally(c, base + run.end);
+        for (int x = run.begin; x < run.end; ++x) {
+          if (run.row > 0) tally(c, base - width + x);
+          if (run.row + 1 < height) tally(c, base + width + x);
         }
       }
       if (border.empty()) continue;
@@ -145,23 +206,18 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     final_label[c] = component_weight[c] >= min_weight ? next_new_label++ : -1;
   }
 
-  // Renumber 0..m-1 in order of first appearance.
+  // Renumber 0..m-1 in order of first appearance; pixels outside any run become -1.
   std::vector<int> renumber(static_cast<std::size_t>(next_new_label), -1);
   int count = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int c = component[i];
-    if (c < 0) {
-      label[i] = -1;
-      continue;
-    }
-    const int value = final_label[c];
-    if (value < 0) {
-      label[i] = -1;
-      continue;
-    }
+  std::fill(label, label + labels.total(), -1);
+  for (int r = 0; r < run_count; ++r) {
+    const int value = final_label[component_of_run[r]];
+    if (value < 0) continue;
     int& mapped = renumber[static_cast<std::size_t>(value)];
     if (mapped < 0) mapped = count++;
-    label[i] = mapped;
+    const Run& run = runs[r];
+    int* row_labels = label + static_cast<std::size_t>(run.row) * width;
+    std::fill(row_labels + run.begin, row_labels + run.end, mapped);
   }
   return count;
 }
@@ -188,25 +244,66 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
   };
   std::vector<Sums> sums(static_cast<std::size_t>(std::max(0, count)));
   const bool depth = features.hasDepth();
+  // Runs of equal labels are summed in float registers (relative to the label's first point),
+  // then added to the double totals.
+  const float* rho = density.empty() ? nullptr : density.ptr<float>();
   for (int row = 0; row < labels.rows; ++row) {
     const int* l = labels.ptr<int>(row);
-    for (int col = 0; col < labels.cols; ++col) {
-      if (l[col] < 0) continue;
-      const std::size_t i = static_cast<std::size_t>(row) * features.width + col;
-      Sums& s = sums[static_cast<std::size_t>(l[col])];
-      s.n += 1.0;
-      s.u += col;
-      s.v += row;
-      s.color += Eigen::Vector3d(features.r[i], features.g[i], features.b[i]);
-      if (!density.empty()) s.density += density.at<float>(row, col);
-      if (depth) {
-        const Eigen::Vector3d p(features.x[i], features.y[i], features.z[i]);
-        if (s.n == 1.0) s.reference = p;
-        const Eigen::Vector3d q = p - s.reference;
-        s.position += q;
-        s.scatter += q * q.transpose();
-        s.normal += Eigen::Vector3d(features.nx[i], features.ny[i], features.nz[i]);
+    const std::size_t base = static_cast<std::size_t>(row) * features.width;
+    int col = 0;
+    while (col < labels.cols) {
+      const int k = l[col];
+      int end = col + 1;
+      while (end < labels.cols && l[end] == k) ++end;
+      if (k >= 0) {
+        Sums& s = sums[static_cast<std::size_t>(k)];
+        if (depth && s.n == 0.0) {
+          s.reference = Eigen::Vector3d(features.x[base + col], features.y[base + col],
+                                        features.z[base + col]);
+        }
+        const double run = end - col;
+        s.n += run;
+        s.u += 0.5 * run * (col + end - 1);
+        s.v += run * row;
+        float sr = 0, sg = 0, sb = 0, srho = 0;
+        for (int x = col; x < end; ++x) {
+          sr += features.r[base + x];
+          sg += features.g[base + x];
+          sb += features.b[base + x];
+          if (rho != nullptr) srho += rho[base + x];
+        }
+        s.color += Eigen::Vector3d(sr, sg, sb);
+        s.density += srho;
+        if (depth) {
+          const float rx = static_cast<float>(s.reference.x());
+          const float ry = static_cast<float>(s.reference.y());
+          const float rz = static_cast<float>(s.reference.z());
+          float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+          float snx = 0, sny = 0, snz = 0;
+          for (int x = col; x < end; ++x) {
+            const std::size_t i = base + x;
+            const float dx = features.x[i] - rx, dy = features.y[i] - ry, dz = features.z[i] - rz;
+            sx += dx;
+            sy += dy;
+            sz += dz;
+            sxx += dx * dx;
+            sxy += dx * dy;
+            sxz += dx * dz;
+            syy += dy * dy;
+            syz += dy * dz;
+            szz += dz * dz;
+            snx += features.nx[i];
+            sny += features.ny[i];
+            snz += features.nz[i];
+          }
+          s.position += Eigen::Vector3d(sx, sy, sz);
+          Eigen::Matrix3d scatter;
+          scatter << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+          s.scatter += scatter;
+          s.normal += Eigen::Vector3d(snx, sny, snz);
+        }
       }
+      col = end;
     }
   }
   std::vector<Superpixel> out(sums.size());

@@ -60,7 +60,7 @@ struct DaspConfig {
   float weight_color = 2.0f;    ///< mu_c: weight of the RGB term |c - c_i|^2, colours in [0, 1].
   float weight_normal = 3.0f;   ///< mu_n: weight of the normal term 1 - n . n_i.
   /// DALIC search window half-size as a multiple of the cluster's projected radius (C in alg. 3).
-  float window_multiple = 2.0f;
+  float window_multiple = 1.5f;
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;
   /// After the last iteration, every superpixel is made 4-connected (stray pieces join the
   /// neighbour they share most border with). The thesis does not do this; users want it.
@@ -87,7 +87,7 @@ struct AspConfig {
   int iterations = 5;            ///< DALIC iterations.
   float weight_spatial = 1.0f;   ///< Weight of the compactness term (|u - u_i| / R_rho(u_i))^2.
   float weight_color = 2.0f;     ///< Weight of the RGB term |c - c_i|^2, colours in [0, 1].
-  float window_multiple = 2.0f;  ///< DALIC search window half-size in units of R_rho.
+  float window_multiple = 1.5f;  ///< DALIC search window half-size in units of R_rho.
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;
   bool enforce_connectivity = true;
   float min_size_fraction = 0.1f;  ///< See DaspConfig::min_size_fraction.

@@ -101,7 +101,7 @@ struct DalicParams {
   float weight_spatial = 1.0f;
   float weight_color = 2.0f;
   float weight_normal = 3.0f;
-  float window_multiple = 2.0f;
+  float window_multiple = 1.5f;
   float radius_m = 0.02f;  ///< R for kDepthAdaptive / kColorDepth2D (metres).
   /// Purge clusters with fewer pixels than this fraction of their expected area 1/rho.
   float min_size_fraction = 0.1f;

@@ -1,0 +1,274 @@
+// Benchmarks of every DASP stage at 640x480, K = 1000, 5 iterations, single-threaded and with all
+// cores, against OpenCV ximgproc SLIC (10 iterations, region size for K near 1000) on the same
+// frame in the same run; prints the time ratio and the peak memory of one frame. Scaling runs
+// show the runtime against the pixel count (linear) and against K (flat).
+//
+// Frame: learn0 of ../shared/data/osd/learn (or $DASP_BENCH_FRAME_DIR/<name>), else a synthetic
+// textured two-plane scene of the same size.
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc.hpp>
+
+#include "dasp/dasp.h"
+#include "dasp/stages.h"
+
+namespace {
+
+using namespace dasp;
+
+constexpr int kCount = 1000;
+constexpr int kIterations = 5;
+constexpr int kSlicRegionSize = 18;  // 640x480 / 18^2 = 948 grid cells; SLIC returns about 970
+
+RgbdFrame loadFrame() {
+  namespace fs = std::filesystem;
+  fs::path folder = fs::path(__FILE__).parent_path() / "../../../../shared/data/osd/learn";
+  if (const char* env = std::getenv("DASP_BENCH_FRAME_DIR")) folder = env;
+  RgbdFrame frame;
+  frame.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f};
+  if (fs::exists(folder / "learn0_rgb.png")) {
+    frame.color = cv::imread((folder / "learn0_rgb.png").string(), cv::IMREAD_COLOR);
+    frame.depth = cv::imread((folder / "learn0_depth_mm.png").string(), cv::IMREAD_UNCHANGED);
+    std::printf("frame: %s/learn0\n", folder.string().c_str());
+    return frame;
+  }
+  std::printf("frame: synthetic (no data at %s)\n", folder.string().c_str());
+  frame.color = cv::Mat(480, 640, CV_8UC3);
+  cv::randu(frame.color, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::GaussianBlur(frame.color, frame.color, cv::Size(0, 0), 4.0);
+  frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(2000));
+  frame.depth(cv::Rect(160, 120, 320, 240)).setTo(1200);
+  return frame;
+}
+
+const RgbdFrame& frame() {
+  static const RgbdFrame f = loadFrame();
+  return f;
+}
+
+DaspConfig config(int threads) {
+  DaspConfig c;
+  c.superpixel_count = kCount;
+  c.iterations = kIterations;
+  c.threads = threads;
+  return c;
+}
+
+// Frame scaled by factor/4 (colour area-interpolated, depth nearest), intrinsics scaled too.
+RgbdFrame scaledFrame(int quarter_factor) {
+  const double s = quarter_factor / 4.0;
+  RgbdFrame f;
+  cv::resize(frame().color, f.color, cv::Size(), s, s, cv::INTER_LINEAR);
+  cv::resize(frame().depth, f.depth, cv::Size(), s, s, cv::INTER_NEAREST);
+  const Intrinsics k = frame().intrinsics;
+  f.intrinsics = {static_cast<float>(k.fx * s), static_cast<float>(k.fy * s),
+                  static_cast<float>((k.cx + 0.5) * s - 0.5),
+                  static_cast<float>((k.cy + 0.5) * s - 0.5)};
+  return f;
+}
+
+void BM_Features(benchmark::State& state) {
+  const DaspConfig c = config(static_cast<int>(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(computeFeatures(frame(), c));
+}
+BENCHMARK(BM_Features)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+void BM_Density(benchmark::State& state) {
+  const PixelFeatures f = computeFeatures(frame(), config(1));
+  for (auto _ : state) {
+    const float radius = radiusForCount(f, kCount);
+    benchmark::DoNotOptimize(computeDepthDensity(f, radius));
+  }
+}
+BENCHMARK(BM_Density)->Unit(benchmark::kMillisecond);
+
+void BM_Sampling(benchmark::State& state) {
+  const PixelFeatures f = computeFeatures(frame(), config(1));
+  const cv::Mat density = computeDepthDensity(f, radiusForCount(f, kCount));
+  const auto method = static_cast<SeedingMethod>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(sampleSeeds(density, method, 0));
+  state.SetLabel(method == SeedingMethod::kSpdsImproved ? "SPDS alg. 2"
+                 : method == SeedingMethod::kSpds       ? "SPDS alg. 1"
+                 : method == SeedingMethod::kRandom     ? "random"
+                                                        : "grid");
+}
+BENCHMARK(BM_Sampling)
+    ->ArgName("method")
+    ->Arg(static_cast<int>(SeedingMethod::kSpdsImproved))
+    ->Arg(static_cast<int>(SeedingMethod::kSpds))
+    ->Arg(static_cast<int>(SeedingMethod::kRandom))
+    ->Unit(benchmark::kMillisecond);
+
+struct DalicFixture {
+  PixelFeatures features;
+  cv::Mat density;
+  DalicParams params;
+  std::vector<Seed> seeds;
+  explicit DalicFixture(int threads) {
+    const DaspConfig c = config(threads);
+    features = computeFeatures(frame(), c);
+    params.radius_m = radiusForCount(features, kCount);
+    density = computeDepthDensity(features, params.radius_m);
+    params.window_multiple = c.window_multiple;
+    params.target_count = kCount;
+    params.threads = threads;
+    seeds = sampleSeeds(density, c.seeding, c.seed);
+  }
+};
+
+// One DALIC iteration (assignment + update), after the initial one.
+void BM_DalicIteration(benchmark::State& state) {
+  DalicFixture fx(static_cast<int>(state.range(0)));
+  Dalic dalic(fx.features, fx.density, fx.params);
+  dalic.initialize(fx.seeds);
+  dalic.iterate();
+  for (auto _ : state) dalic.iterate();
+}
+BENCHMARK(BM_DalicIteration)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+void BM_DalicAssign(benchmark::State& state) {
+  DalicFixture fx(static_cast<int>(state.range(0)));
+  Dalic dalic(fx.features, fx.density, fx.params);
+  dalic.initialize(fx.seeds);
+  dalic.iterate();
+  for (auto _ : state) dalic.assign();
+}
+BENCHMARK(BM_DalicAssign)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+void BM_ConnectivityAndSuperpointFit(benchmark::State& state) {
+  DalicFixture fx(1);
+  Dalic dalic(fx.features, fx.density, fx.params);
+  dalic.initialize(fx.seeds);
+  for (int i = 0; i < kIterations; ++i) dalic.iterate();
+  const cv::Mat raw = dalic.labels().clone();
+  const cv::Mat valid(fx.features.height, fx.features.width, CV_8UC1, fx.features.valid.data());
+  for (auto _ : state) {
+    cv::Mat labels = raw.clone();
+    enforceConnectivity(labels, valid, fx.density, 0.1);
+    benchmark::DoNotOptimize(fitSuperpoints(labels, fx.features, fx.density, fx.params.radius_m));
+  }
+}
+BENCHMARK(BM_ConnectivityAndSuperpointFit)->Unit(benchmark::kMillisecond);
+
+void BM_Dasp(benchmark::State& state) {
+  const DaspConfig c = config(static_cast<int>(state.range(0)));
+  std::size_t count = 0;
+  for (auto _ : state) count = computeDasp(frame(), c).superpixels.size();
+  state.counters["superpixels"] = static_cast<double>(count);
+}
+BENCHMARK(BM_Dasp)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+void BM_OpenCvSlic(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  const int previous = cv::getNumThreads();
+  cv::setNumThreads(threads == 1 ? 1 : -1);
+  int count = 0;
+  for (auto _ : state) {
+    cv::Mat lab;
+    cv::cvtColor(frame().color, lab, cv::COLOR_BGR2Lab);
+    auto slic = cv::ximgproc::createSuperpixelSLIC(lab, cv::ximgproc::SLIC, kSlicRegionSize);
+    slic->iterate(10);
+    cv::Mat labels;
+    slic->getLabels(labels);
+    count = slic->getNumberOfSuperpixels();
+  }
+  cv::setNumThreads(previous);
+  state.counters["superpixels"] = count;
+}
+BENCHMARK(BM_OpenCvSlic)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+// Runtime against pixel count: the frame scaled by 2/4 .. 8/4 per axis (0.25x .. 4x pixels),
+// K scaled with the pixel count so that superpixels keep their pixel size.
+void BM_DaspPixels(benchmark::State& state) {
+  const RgbdFrame f = scaledFrame(static_cast<int>(state.range(0)));
+  DaspConfig c = config(1);
+  c.superpixel_count = static_cast<int>(kCount * state.range(0) * state.range(0) / 16);
+  for (auto _ : state) benchmark::DoNotOptimize(computeDasp(f, c));
+  state.counters["pixels"] = static_cast<double>(f.color.total());
+  state.counters["ns_per_pixel"] = benchmark::Counter(
+      static_cast<double>(f.color.total()),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_DaspPixels)
+    ->ArgName("quarter_scale")
+    ->DenseRange(2, 8, 2)
+    ->Unit(benchmark::kMillisecond);
+
+// Runtime against K at 640x480: flat.
+void BM_DaspCount(benchmark::State& state) {
+  DaspConfig c = config(1);
+  c.superpixel_count = static_cast<int>(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(computeDasp(frame(), c));
+}
+BENCHMARK(BM_DaspCount)
+    ->ArgName("K")
+    ->RangeMultiplier(2)
+    ->Range(250, 4000)
+    ->Unit(benchmark::kMillisecond);
+
+// Records the mean real time per run name, to print the DASP / SLIC ratio at the end.
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& run : runs) {
+      if (run.run_type == Run::RT_Iteration && run.iterations > 0) {
+        times_ms[run.benchmark_name()] = run.GetAdjustedRealTime();
+      }
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> times_ms;
+};
+
+long maxRssKb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  // Peak memory of one frame: resident set before and after the first DASP run.
+  const RgbdFrame& f = frame();
+  const long before_kb = maxRssKb();
+  const Superpixels first = computeDasp(f, config(1));
+  const long after_kb = maxRssKb();
+  std::printf(
+      "peak memory: max RSS %.1f MB before the first frame, %.1f MB after it (+%.1f MB "
+      "for one %dx%d DASP frame, %zu superpixels)\n",
+      before_kb / 1024.0, after_kb / 1024.0, (after_kb - before_kb) / 1024.0, f.color.cols,
+      f.color.rows, first.superpixels.size());
+  RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  const auto find = [&](const std::string& name) {
+    const auto it = reporter.times_ms.find(name);
+    return it == reporter.times_ms.end() ? -1.0 : it->second;
+  };
+  const double dasp1 = find("BM_Dasp/threads:1"), slic1 = find("BM_OpenCvSlic/threads:1");
+  const double dasp0 = find("BM_Dasp/threads:0"), slic0 = find("BM_OpenCvSlic/threads:0");
+  if (dasp1 > 0 && slic1 > 0) {
+    std::printf(
+        "ratio DASP / OpenCV SLIC, single-threaded: %.3f (%.2f ms / %.2f ms; bar <= 0.125)\n",
+        dasp1 / slic1, dasp1, slic1);
+  }
+  if (dasp1 > 0 && slic0 > 0) {
+    std::printf("ratio DASP single-threaded / OpenCV SLIC default threads: %.3f\n", dasp1 / slic0);
+  }
+  if (dasp0 > 0 && slic0 > 0) {
+    std::printf("ratio DASP / OpenCV SLIC, all cores: %.3f (%.2f ms / %.2f ms)\n", dasp0 / slic0,
+                dasp0, slic0);
+  }
+  benchmark::Shutdown();
+  return 0;
+}
