@@ -1,6 +1,4 @@
 # Extra dependencies and flags of the dasp library, tools, benchmarks and tests.
-endif()
-
 # dasp-core: the DALIC assignment and feature loops are written to vectorise, but GCC's -O2
 # "very cheap" cost model refuses loops of unknown trip count; allow its dynamic model there.
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
