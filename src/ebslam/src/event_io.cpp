@@ -669,6 +669,15 @@ EventReadResult readEventFile(const std::string& path, std::optional<EventFileFo
 EventReadResult readEventFile(const std::string& path, const EventReadOptions& options) {
   EventFileReader reader(path, options);
   EventReadResult result;
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (!ec) {
+    // Binary: an upper bound of the count (8 bytes per event). Text: a typical line has 16 to
+    // 20 characters; a short guess only costs a regrowth.
+    const std::uintmax_t bytes_per_event = reader.format() == EventFileFormat::kBinary ? 8 : 16;
+    result.events.reserve(static_cast<std::size_t>(
+        std::min<std::uintmax_t>(bytes / bytes_per_event, std::uintmax_t{1} << 28)));
+  }
   EventVector batch;
   constexpr std::size_t kBatch = 1 << 16;
   while (reader.next(batch, kBatch) > 0) {
