@@ -190,6 +190,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--texture-seed", lines.seed, "seed of the procedural texture")
       ->capture_default_str();
+  app.add_option("--line-intensity", lines.foreground,
+                 "intensity of the procedural lines and circles in [0, 1] (ceiling: " +
+                     std::to_string(lines.background) + ")")
+      ->capture_default_str();
   app.add_option("--ceiling-height", options.ceiling_height_m, "ceiling above the sensor [m]")
       ->capture_default_str();
   app.add_option("--t-begin", options.t_begin_s, "start, seconds after the trajectory start")
