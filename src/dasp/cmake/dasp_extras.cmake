@@ -1,4 +1,25 @@
-# Extra dependencies and flags of the dasp library, tools, benchmarks and tests.
+# Extra dependencies of the dasp tools: OpenCV ximgproc and PCL supervoxels for the peer methods
+# (library dasp_peers, tools/peers/), CLI11 and nlohmann-json for the command lines. They are
+# linked into the tools only, never into the dasp library itself.
+if(DASP_BUILD_TOOLS)
+  find_package(CLI11 REQUIRED)
+  find_package(nlohmann_json 3 REQUIRED)
+  find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs ximgproc)
+  # Debian's VTK (pulled in by PCLConfig) references MPI::MPI_C, which needs the C language.
+  enable_language(C)
+  find_package(MPI COMPONENTS C QUIET)
+  find_package(PCL 1.10 REQUIRED COMPONENTS common octree kdtree search segmentation)
+  add_library(dasp_peers STATIC ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/peers.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/methods.cpp)
+  target_include_directories(dasp_peers PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/tools)
+  target_include_directories(dasp_peers SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
+  target_link_libraries(dasp_peers PUBLIC dasp::dasp opencv_ximgproc
+    PRIVATE pcl_common pcl_octree pcl_kdtree pcl_search pcl_segmentation)
+  target_compile_options(dasp_peers PRIVATE ${DASP_WARNINGS})
+  list(APPEND DASP_TOOL_LIBS dasp_peers CLI11::CLI11 nlohmann_json::nlohmann_json)
+  list(APPEND DASP_TEST_LIBS dasp_peers)  # test/peers_test.cpp
+endif()
+
 # dasp-core: the DALIC assignment and feature loops are written to vectorise, but GCC's -O2
 # "very cheap" cost model refuses loops of unknown trip count; allow its dynamic model there.
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")

@@ -72,6 +72,17 @@ class DenseLabels {
  public:
   DenseLabels(const cv::Mat& labels, const cv::Mat& mask, bool merge_negative)
       : index(labels.size(), CV_32SC1, cv::Scalar(-1)) {
+    // Superpixel labels are small non-negative numbers: a lookup table is much faster than a
+    // hash map. The hash map remains for huge label values.
+    int max_label = -1;
+    for (int y = 0; y < labels.rows; ++y) {
+      const int* row = labels.ptr<int>(y);
+      for (int x = 0; x < labels.cols; ++x) {
+        if (inMask(mask, y, x)) max_label = std::max(max_label, row[x]);
+      }
+    }
+    const bool use_table = max_label < (1 << 24);
+    std::vector<int> table(use_table ? static_cast<std::size_t>(max_label) + 2 : 0, -1);
     std::unordered_map<int, int> map;
     for (int y = 0; y < labels.rows; ++y) {
       const int* row = labels.ptr<int>(y);
@@ -83,12 +94,13 @@ class DenseLabels {
           if (!merge_negative) continue;
           label = -1;
         }
-        auto [it, inserted] = map.try_emplace(label, count);
-        if (inserted) {
-          ++count;
+        int* slot = use_table ? &table[static_cast<std::size_t>(label) + 1]
+                              : &map.try_emplace(label, -1).first->second;
+        if (*slot < 0) {
+          *slot = count++;
           original.push_back(label);
         }
-        out[x] = it->second;
+        out[x] = *slot;
         ++pixels;
       }
     }
@@ -122,8 +134,12 @@ Overlap computeOverlap(const cv::Mat& labels, const cv::Mat& ground_truth, const
   overlap.pixels = segments.pixels;
   overlap.segment_size.assign(segments.count, 0);
   overlap.reference_size.assign(references.count, 0);
+  // Joint counts |S n T|: a dense table when it is small (superpixels x a few objects).
+  const std::size_t cells =
+      static_cast<std::size_t>(segments.count) * static_cast<std::size_t>(references.count);
+  const bool dense = cells <= (std::size_t{1} << 25);
+  std::vector<std::size_t> table(dense ? cells : 0, 0);
   std::unordered_map<std::uint64_t, std::size_t> joint;
-  joint.reserve(static_cast<std::size_t>(segments.count) * 4);
   for (int y = 0; y < labels.rows; ++y) {
     const int* s_row = segments.index.ptr<int>(y);
     const int* t_row = references.index.ptr<int>(y);
@@ -133,14 +149,27 @@ Overlap computeOverlap(const cv::Mat& labels, const cv::Mat& ground_truth, const
       const int t = t_row[x];
       ++overlap.segment_size[s];
       ++overlap.reference_size[t];
-      ++joint[(static_cast<std::uint64_t>(s) << 32) | static_cast<std::uint32_t>(t)];
+      if (dense) {
+        ++table[static_cast<std::size_t>(s) * references.count + t];
+      } else {
+        ++joint[(static_cast<std::uint64_t>(s) << 32) | static_cast<std::uint32_t>(t)];
+      }
     }
   }
   overlap.per_segment.resize(segments.count);
-  for (const auto& [key, count] : joint) {
-    const int s = static_cast<int>(key >> 32);
-    const int t = static_cast<int>(key & 0xffffffffu);
-    overlap.per_segment[s].emplace_back(t, count);
+  if (dense) {
+    for (int s = 0; s < segments.count; ++s) {
+      for (int t = 0; t < references.count; ++t) {
+        const std::size_t count = table[static_cast<std::size_t>(s) * references.count + t];
+        if (count > 0) overlap.per_segment[s].emplace_back(t, count);
+      }
+    }
+  } else {
+    for (const auto& [key, count] : joint) {
+      const int s = static_cast<int>(key >> 32);
+      const int t = static_cast<int>(key & 0xffffffffu);
+      overlap.per_segment[s].emplace_back(t, count);
+    }
   }
   return overlap;
 }
@@ -313,7 +342,7 @@ ConnectivityScores connectivity(const cv::Mat& labels, const cv::Mat& mask) {
       if (above != nullptr && above[x] == s) unite(i, i - cols);
     }
   }
-  std::unordered_map<std::int32_t, std::size_t> component_size;
+  std::vector<std::size_t> component_size(total, 0);  // indexed by the root pixel
   std::vector<std::size_t> segment_size(segments.count, 0);
   for (int y = 0; y < labels.rows; ++y) {
     const int* row = segments.index.ptr<int>(y);
@@ -325,8 +354,11 @@ ConnectivityScores connectivity(const cv::Mat& labels, const cv::Mat& mask) {
   }
   std::vector<std::size_t> largest(segments.count, 0);
   std::vector<std::size_t> components(segments.count, 0);
-  for (const auto& [root, size] : component_size) {
-    const int s = segments.index.at<int>(root / cols, root % cols);
+  const int* flat_index = segments.index.ptr<int>(0);  // continuous: created by DenseLabels
+  for (std::size_t root = 0; root < total; ++root) {
+    const std::size_t size = component_size[root];
+    if (size == 0) continue;
+    const int s = flat_index[root];
     largest[s] = std::max(largest[s], size);
     ++components[s];
   }

@@ -1,0 +1,247 @@
+#!/usr/bin/python3
+"""Turns dasp_evaluate output folders into docs/results/dasp.md and its plots.
+
+Usage: make_dasp_results.py --out docs/results [--command "..."] EVAL_DIR [EVAL_DIR ...]
+
+Every EVAL_DIR holds the mean.csv / mean.json written by dasp_evaluate (e.g. one run for the
+DASP family and the OpenCV peers, one for PCL VCCS). Rows of all folders are merged; a method
+that appears in two folders keeps the rows of the later folder.
+"""
+import argparse
+import csv
+import datetime
+import json
+import os
+import subprocess
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+METHOD_ORDER = ["DASP", "ASP_RGB", "ASP_RGBD", "SLIC", "SEEDS", "VCCS"]
+STYLE = {
+    "DASP": dict(color="tab:red", marker="o"),
+    "ASP_RGB": dict(color="tab:blue", marker="s"),
+    "ASP_RGBD": dict(color="tab:purple", marker="D"),
+    "SLIC": dict(color="tab:green", marker="^"),
+    "SEEDS": dict(color="tab:olive", marker="v"),
+    "VCCS": dict(color="tab:orange", marker="P"),
+}
+# (column, title, better) for the plots.
+PLOTS = [
+    ("boundary_recall", "Boundary recall (2 px)", "higher"),
+    ("ue_np", "Undersegmentation error (Neubert-Protzel)", "lower"),
+    ("use_thesis", "Undersegmentation error (thesis def. 14)", "lower"),
+    ("asa", "Achievable segmentation accuracy", "higher"),
+    ("ce_depth_mm", "Compression error depth [mm]", "lower"),
+    ("ev_depth", "Explained variation depth", "higher"),
+    ("ce_color", "Compression error colour [0..255]", "lower"),
+    ("co_ipq", "Compactness CO (isoperimetric quotient)", "higher"),
+    ("ipq_3d", "3D isoperimetric quotient", "higher"),
+    ("disconnected_fraction", "Fraction of disconnected superpixels", "lower"),
+    ("count_ratio", "Delivered / requested superpixels", "1 is exact"),
+    ("time_ms", "Time per frame [ms], one core", "lower"),
+]
+
+
+def read_means(folders):
+    rows = {}
+    meta = []
+    for folder in folders:
+        with open(os.path.join(folder, "mean.csv"), newline="") as f:
+            for row in csv.DictReader(f):
+                key = (row["method"], int(row["k"]))
+                rows[key] = {k: (float(v) if k not in ("method",) and v != "" else v)
+                             for k, v in row.items()}
+        meta_path = os.path.join(folder, "mean.json")
+        if os.path.exists(meta_path):
+            with open(meta_path) as f:
+                m = json.load(f)
+            m.pop("means", None)
+            meta.append((folder, m))
+    return rows, meta
+
+
+def methods_of(rows):
+    present = {m for m, _ in rows}
+    return [m for m in METHOD_ORDER if m in present] + sorted(present - set(METHOD_ORDER))
+
+
+def fmt(v, digits):
+    return "" if v == "" else f"{v:.{digits}f}"
+
+
+def plot(rows, out_dir):
+    files = []
+    methods = methods_of(rows)
+    ks = sorted({k for _, k in rows})
+    fig, axes = plt.subplots(3, 4, figsize=(18, 12))
+    for ax, (col, title, better) in zip(axes.flat, PLOTS):
+        for m in methods:
+            pts = [(k, rows[(m, k)].get(col, "")) for k in ks if (m, k) in rows]
+            pts = [(k, v) for k, v in pts if v != ""]
+            if not pts:
+                continue
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], label=m, **STYLE.get(m, {}))
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(ks)
+        ax.set_xticklabels([str(k) for k in ks])
+        ax.set_xlabel("requested superpixels K")
+        ax.set_title(f"{title} ({better})", fontsize=10)
+        ax.grid(True, alpha=0.3)
+        if col in ("time_ms",):
+            ax.set_yscale("log")
+    axes.flat[0].legend(fontsize=9)
+    fig.tight_layout()
+    path = os.path.join(out_dir, "dasp_metrics_vs_k.png")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    files.append(path)
+    # The four metrics of thesis fig. 3.13 against the delivered number of superpixels.
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.2))
+    for ax, (col, title) in zip(axes, [("boundary_recall", "Boundary recall (2 px)"),
+                                       ("ue_np", "UE (Neubert-Protzel)"),
+                                       ("ev_depth", "Explained variation depth"),
+                                       ("ce_depth_mm", "Compression error depth [mm]")]):
+        for m in methods:
+            pts = [(rows[(m, k)]["superpixels_in_mask"], rows[(m, k)][col]) for k in ks
+                   if (m, k) in rows and rows[(m, k)].get(col, "") != ""]
+            if pts:
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], label=m, **STYLE.get(m, {}))
+        ax.set_xscale("log")
+        ax.set_xlabel("superpixels inside the mask (delivered)")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=9)
+    fig.tight_layout()
+    path = os.path.join(out_dir, "dasp_fig313_vs_count.png")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    files.append(path)
+    return files
+
+
+def git_head():
+    try:
+        return subprocess.check_output(["git", "rev-parse", "--short", "HEAD"],
+                                       cwd=os.path.dirname(os.path.abspath(__file__)),
+                                       text=True).strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True, help="output folder (docs/results)")
+    parser.add_argument("--command", default="src/dasp/tools/make_dasp_results.sh",
+                        help="command line to quote in the report")
+    parser.add_argument("folders", nargs="+")
+    args = parser.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    rows, meta = read_means(args.folders)
+    if not rows:
+        raise SystemExit("no rows in " + " ".join(args.folders))
+    plots = plot(rows, args.out)
+    methods = methods_of(rows)
+    ks = sorted({k for _, k in rows})
+    frames = sorted({int(m.get("frames", 0)) for _, m in meta})
+
+    md = []
+    md.append("# DASP: superpixel quality and speed on the OSD learn frames\n")
+    md.append(f"Generated {datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC from commit "
+              f"`{git_head()}` by `{args.command}` (see the end of this page). Frames: "
+              f"{', '.join(str(f) for f in frames)} RGB-D frames of `../shared/data/osd/learn`, "
+              "640x480; mask = object label > 0 and depth > 0; every method gets the same frames, "
+              "mask and requested K; DASP, ASP_RGB and ASP_RGBD run 5 DALIC iterations, seed 0; "
+              "OpenCV SLIC 10 iterations (region size round(sqrt(640*480/K)), ruler 10, CIELab); "
+              "SEEDS 4 levels, 4 iterations; PCL VCCS with seed resolution sqrt(surface/K).\n")
+    md.append("## K = 1000, the columns of the issue's anchor table\n")
+    md.append("Means over all frames. Rec = boundary recall at 2 px (normalised by the "
+              "ground-truth boundary), UE = Neubert-Protzel undersegmentation error, ASA = "
+              "achievable segmentation accuracy, CE depth = depth compression error, CO = "
+              "isoperimetric compactness (thesis eq. A.6/A.7). Time = wall time of the method "
+              "call per frame, one core, measured while other jobs shared the 2-core machine.\n")
+    md.append("| method | superpixels delivered (K = 1000) | superpixels in mask | Rec | UE | ASA "
+              "| CE depth | CO | time per frame |")
+    md.append("|---|---|---|---|---|---|---|---|---|")
+    for m in methods:
+        r = rows.get((m, 1000))
+        if not r:
+            continue
+        md.append(f"| {m} | {r['superpixels']:.0f} | {r['superpixels_in_mask']:.0f} | "
+                  f"{r['boundary_recall']:.3f} | {r['ue_np']:.4f} | {r['asa']:.4f} | "
+                  f"{r['ce_depth_mm']:.1f} mm | {r['co_ipq']:.2f} | {r['time_ms']:.0f} ms |")
+    md.append("")
+    md.append("Reference (issue 3 anchor table, measured with the thesis author's original code "
+              "and the peers on these machines): original DASP K = 1000: 923 in mask, Rec 0.984, "
+              "UE 0.0037, ASA 0.9982, CE depth 6.9 mm, CO 0.95, about 60 ms; PCL VCCS: 1013, "
+              "0.966, 0.0050, 0.9976, 6.7 mm, 0.64, 100-130 ms; OpenCV SLIC K = 2000: 1386, 0.966, "
+              "0.016, 0.992, 15.3 mm, 0.96, 100-140 ms.\n")
+    md.append("## All metrics per method and K\n")
+    cols = [("superpixels", "delivered", 0), ("superpixels_in_mask", "in mask", 0),
+            ("boundary_recall", "Rec", 3), ("boundary_f1", "boundary F1", 3),
+            ("ue_np", "UE NP", 4), ("use_thesis", "USE thesis", 4), ("asa", "ASA", 4),
+            ("ce_depth_mm", "CE depth mm", 2), ("ce_position_mm", "CE 3D mm", 2),
+            ("ce_color", "CE colour", 2), ("ce_normal", "CE normal", 3),
+            ("ev_depth", "EV depth", 4), ("ev_color", "EV colour", 3),
+            ("co_ipq", "CO", 3), ("ipq_3d", "IPQ 3D", 3), ("cq", "CQ", 4),
+            ("disconnected_fraction", "disconnected", 4), ("ude_relative", "UDE rel", 3),
+            ("time_ms", "ms", 0)]
+    md.append("| method | K | " + " | ".join(c[1] for c in cols) + " |")
+    md.append("|---|---|" + "---|" * len(cols))
+    for m in methods:
+        for k in ks:
+            r = rows.get((m, k))
+            if not r:
+                continue
+            md.append(f"| {m} | {k} | " +
+                      " | ".join(fmt(r.get(c, ""), d) for c, _, d in cols) + " |")
+    md.append("")
+    md.append("## Plots\n")
+    for p in plots:
+        md.append(f"![{os.path.basename(p)}]({os.path.basename(p)})\n")
+    md.append("## Metric definitions (src/dasp/include/dasp/metrics.h)\n")
+    md.append(
+        "- All metrics look only at pixels inside the mask; 4-neighbourhoods; a pixel is a "
+        "boundary pixel if a 4-neighbour inside the mask has another label (both sides marked, "
+        "the mask and image borders are no boundary).\n"
+        "- Rec: fraction of ground-truth boundary pixels with a superpixel boundary pixel within "
+        "2 px (Chebyshev, a 5x5 window), normalised by the ground-truth boundary as in the "
+        "superpixel literature. The thesis' def. 13 normalises by the superpixel boundary; that "
+        "number is the boundary precision of the library (not tabulated: it mostly measures "
+        "how few superpixels there are).\n"
+        "- UE NP = (1/N) sum_T sum_{S n T != 0} min(|S n T|, |S \\ T|); USE thesis = def. 14 with "
+        "gamma = 0.05; ASA = (1/N) sum_S max_T |S n T|; N = pixels in the mask.\n"
+        "- CE = sqrt(mean squared deviation of a pixel's feature from its superpixel's mean), "
+        "depth and 3D position in mm, colour in RGB 0..255, normals as unit vectors (mean "
+        "re-normalised); EV = between-superpixel variance / total variance (eq. A.9; 1 = all "
+        "explained).\n"
+        "- CO = sum_S (|S|/N) 4 pi |S| / |dS|^2 with |dS| the segment's pixels that touch another "
+        "label, the mask border or the image border (eq. A.6/A.7; lattice values can exceed 1). "
+        "IPQ 3D = eq. A.13-A.15 with |n_z| clamped at 0.1, weighted by 3D area.\n"
+        "- CQ = eq. A.5 and 'disconnected' = fraction of superpixels in more than one "
+        "4-connected piece, both over the whole image (a property of the method's output).\n"
+        "- UDE rel = RMS of (rho_C - rho_0) / rho_0 over the mask, rho_C the Gaussian kernel "
+        "density of the superpixel centroids (def. 22-23). DASP places superpixels uniformly on "
+        "the 3D surface, not in the image, so its 2D UDE is expected to be higher.\n"
+        "- Delivered = superpixels (labels >= 0) in the whole label image; in mask = those with a "
+        "pixel inside the mask. DASP and ASP_RGBD label only pixels with depth.\n")
+    md.append("## How to regenerate\n")
+    md.append("```\nsrc/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
+              "builds `dasp_evaluate` (RelWithDebInfo) in `build_dir` (default "
+              "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
+              "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, PCL VCCS in a second), frames in "
+              "parallel (JOBS, default 2) with every method single-threaded, and calls this "
+              "script. Per-frame CSV/JSON stay in `build_dir/eval/*/per_frame.*`.\n")
+    for folder, m in meta:
+        md.append(f"- run `{os.path.basename(folder.rstrip('/'))}`: " +
+                  ", ".join(f"{k} = {v}" for k, v in m.items() if k != "data"))
+    md.append("")
+    with open(os.path.join(args.out, "dasp.md"), "w") as f:
+        f.write("\n".join(md))
+    print("wrote", os.path.join(args.out, "dasp.md"), "and", ", ".join(plots))
+
+
+if __name__ == "__main__":
+    main()

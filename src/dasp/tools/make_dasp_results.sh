@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Regenerates docs/results/dasp.md and its plots: builds dasp_evaluate, evaluates every method on
+# all frames of ../shared/data/osd/learn for K in {250, 500, 1000, 2000} and writes the report.
+# Usage: src/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]
+#   JOBS=n   frames evaluated in parallel (default 2); each method itself runs single-threaded.
+#   KS="..." superpixel counts (default "250 500 1000 2000").
+set -euo pipefail
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+BUILD="${1:-/tmp/build_dasp_results}"
+DATA="${2:-${REPO}/../shared/data/osd/learn}"
+JOBS="${JOBS:-2}"
+read -r -a KS <<< "${KS:-250 500 1000 2000}"
+
+cmake -S "${REPO}/src/dasp" -B "${BUILD}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=OFF \
+  -DDASP_BUILD_BENCHMARKS=OFF > "${BUILD}.configure.log"
+cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate
+mkdir -p "${BUILD}/eval"
+"${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/main" \
+  --methods DASP ASP_RGB ASP_RGBD SLIC SEEDS -k "${KS[@]}" -j "${JOBS}"
+# PCL supervoxels are the slowest method: one separate pass per K.
+"${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
+  --methods VCCS -k "${KS[@]}" -j "${JOBS}"
+/usr/bin/python3 "${REPO}/src/dasp/tools/make_dasp_results.py" --out "${REPO}/docs/results" \
+  --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs"
