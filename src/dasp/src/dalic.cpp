@@ -40,9 +40,6 @@ enum Acc : int {
   kSyy,
   kSyz,
   kSzz,
-  kSnx,
-  kSny,
-  kSnz,
   kMass,
   kAccSize
 };
@@ -327,7 +324,6 @@ void Dalic::update() {
           if (depth) {
             const float cx = c.position.x(), cy = c.position.y(), cz = c.position.z();
             float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
-            float snx = 0, sny = 0, snz = 0;
             for (int x = col; x < end; ++x) {
               const std::size_t i = base + x;
               const float dx = f.x[i] - cx, dy = f.y[i] - cy, dz = f.z[i] - cz;
@@ -340,9 +336,6 @@ void Dalic::update() {
               syy += dy * dy;
               syz += dy * dz;
               szz += dz * dz;
-              snx += f.nx[i];
-              sny += f.ny[i];
-              snz += f.nz[i];
             }
             a[kSx] += sx;
             a[kSy] += sy;
@@ -353,9 +346,6 @@ void Dalic::update() {
             a[kSyy] += syy;
             a[kSyz] += syz;
             a[kSzz] += szz;
-            a[kSnx] += snx;
-            a[kSny] += sny;
-            a[kSnz] += snz;
           }
         }
         col = end;
@@ -405,9 +395,7 @@ void Dalic::update() {
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver;
         solver.computeDirect(cov);
         c.normal = solver.eigenvectors().col(0);  // smallest eigenvalue: plane normal (eq. 3.22)
-      } else {
-        c.normal = Eigen::Vector3f(a[kSnx], a[kSny], a[kSnz]);
-      }
+      }  // else: too few points for a plane fit, keep the previous normal
       if (!(c.normal.norm() > 0.0f) || !c.normal.allFinite()) c.normal = -Eigen::Vector3f::UnitZ();
       c.normal.normalize();
       if (c.normal.dot(c.position) > 0.0f) c.normal = -c.normal;  // towards the camera

@@ -83,10 +83,13 @@ struct DaspConfig {
 
 /// Parameters of (colour-only) Adaptive Superpixels, the ASP_RGB baseline.
 struct AspConfig {
-  int superpixel_count = 1000;   ///< Wanted number of superpixels (constant density case).
-  int iterations = 5;            ///< DALIC iterations.
-  float weight_spatial = 1.0f;   ///< Weight of the compactness term (|u - u_i| / R_rho(u_i))^2.
-  float weight_color = 2.0f;     ///< Weight of the RGB term |c - c_i|^2, colours in [0, 1].
+  int superpixel_count = 1000;  ///< Wanted number of superpixels (constant density case).
+  int iterations = 5;           ///< DALIC iterations.
+  float weight_spatial = 1.0f;  ///< Weight of the compactness term (|u - u_i| / R_rho(u_i))^2.
+  /// Weight of the RGB term |c - c_i|^2, colours in [0, 1]. 100 matches SLIC's usual
+  /// compactness m = 10 in CIELAB: (100 / sqrt 3)^2 / m^2 per unit RGB distance squared against
+  /// pi (d / S)^2 = (d / R_rho)^2 for the spacing S, i.e. about 33 pi.
+  float weight_color = 100.0f;
   float window_multiple = 1.5f;  ///< DALIC search window half-size in units of R_rho.
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;
   bool enforce_connectivity = true;
