@@ -136,6 +136,8 @@ def main():
     parser.add_argument("--out", required=True, help="output folder (docs/results)")
     parser.add_argument("--command", default="src/dasp/tools/make_dasp_results.sh",
                         help="command line to quote in the report")
+    parser.add_argument("--source", default=None,
+                        help="which code produced the numbers (default: the git HEAD commit)")
     parser.add_argument("folders", nargs="+")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -149,8 +151,9 @@ def main():
 
     md = []
     md.append("# DASP: superpixel quality and speed on the OSD learn frames\n")
-    md.append(f"Generated {datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC from commit "
-              f"`{git_head()}` by `{args.command}` (see the end of this page). Frames: "
+    source = args.source or f"commit `{git_head()}`"
+    md.append(f"Generated {datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC from {source} "
+              f"by `{args.command}` (see the end of this page). Frames: "
               f"{', '.join(str(f) for f in frames)} RGB-D frames of `../shared/data/osd/learn`, "
               "640x480; mask = object label > 0 and depth > 0; every method gets the same frames, "
               "mask and requested K; DASP, ASP_RGB and ASP_RGBD run 5 DALIC iterations, seed 0; "

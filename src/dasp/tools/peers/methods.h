@@ -25,12 +25,12 @@ std::string methodName(Method method);
 std::vector<Method> allMethods();
 
 struct MethodOptions {
-  int superpixel_count = 1000;   ///< K requested from every method.
-  int iterations = 5;            ///< DALIC iterations for DASP / ASP_RGB / ASP_RGBD (thesis: 5).
-  int slic_iterations = 10;      ///< OpenCV SLIC iterations (OpenCV default).
-  std::uint64_t seed = 0;        ///< Random seed of the DASP family.
-  int threads = 1;               ///< Threads inside DASP / ASP (1 = single core, 0 = all).
-  float vccs_seed_scale = 1.0f;  ///< See VccsConfig::seed_scale.
+  int superpixel_count = 1000;  ///< K requested from every method.
+  int iterations = 5;           ///< DALIC iterations for DASP / ASP_RGB / ASP_RGBD (thesis: 5).
+  int slic_iterations = 10;     ///< OpenCV SLIC iterations (OpenCV default).
+  std::uint64_t seed = 0;       ///< Random seed of the DASP family.
+  int threads = 1;              ///< Threads inside DASP / ASP (1 = single core, 0 = all).
+  float vccs_seed_scale = VccsConfig{}.seed_scale;  ///< See VccsConfig::seed_scale.
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
