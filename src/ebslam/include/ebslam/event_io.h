@@ -12,7 +12,8 @@
 //    boundary, or left by a writer that never closed, is reported as truncated.
 //  - kText: one event per line `t x y p`, '#' comments and blank lines ignored. t is integer
 //    microseconds; a t token with a decimal point or exponent is read as seconds (so
-//    `1.5 3 4 1` is t = 1500000 us). p is 1 (ON) or 0/-1 (OFF). The writer emits the header
+//    `1.5 3 4 1` is t = 1500000 us; decimals are converted exactly and rounded to the nearest
+//    microsecond). p is 1 (ON) or 0/-1 (OFF). The writer emits the header
 //    comment `# ebslam events text v1 width=W height=H` followed by `t_us x y p` lines; a reader
 //    takes the sensor size from that comment.
 //  - kRpgText: the Event Camera Dataset (Mueggler et al., IJRR 2017) `events.txt`:
@@ -63,10 +64,10 @@ struct EventReadResult {
 
 /// Options for reading; all optional.
 struct EventReadOptions {
-  std::optional<EventFileFormat> format;  ///< detected from magic/extension/content when unset
-  /// Overrides the sensor size of text formats (kText without a header comment, kRpgText).
-  /// For kText without header and without this, the size is the bounding box of the events.
-  /// Ignored for kBinary, whose header is authoritative.
+  std::optional<EventFileFormat> format;  ///< detected from magic/content when unset
+  /// Sensor size of the text formats; takes precedence over a kText header comment and the
+  /// kRpgText default. For kText without header and without this, the size is the bounding box
+  /// of the events. Ignored for kBinary, whose header is authoritative.
   std::optional<SensorSize> sensor;
 };
 
