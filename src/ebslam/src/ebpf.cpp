@@ -22,6 +22,10 @@ void EventFilterConfig::validate() const {
   if (!(diffusion_scale >= 0.0) || !std::isfinite(diffusion_scale)) {
     fail("diffusion_scale must be >= 0 and finite");
   }
+  if (adapt_g0 &&
+      (!(adapt_g0_divisor > 0.0) || !(adapt_g0_min > 0.0) || !(adapt_g0_max >= adapt_g0_min))) {
+    fail("adaptive G0 needs divisor > 0 and 0 < min <= max");
+  }
   if (!(initial_spread_m >= 0.0) || !(initial_spread_rad >= 0.0) ||
       !std::isfinite(initial_spread_m) || !std::isfinite(initial_spread_rad)) {
     fail("initial spreads must be >= 0 and finite");
@@ -83,12 +87,36 @@ void validateEvents(const Event* events, std::size_t count, int width, int heigh
   last_t_us = t;
 }
 
-Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera) {
+Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera,
+                            double g0) {
   Diffusion d;
   // eq. 6.9: Delta_x = D / (f G0); eq. 6.10: Delta_theta = 3 / (S G0) with S the sensor size.
-  d.sigma_xy_m = config.diffusion_scale * camera.wTrig() / config.g0;
-  d.sigma_theta_rad = config.diffusion_scale * 3.0 / (camera.width() * config.g0);
+  d.sigma_xy_m = config.diffusion_scale * camera.wTrig() / g0;
+  d.sigma_theta_rad = config.diffusion_scale * 3.0 / (camera.width() * g0);
   return d;
+}
+
+G0Tracker::G0Tracker(const EventFilterConfig& config, const CeilingCamera& camera,
+                     const Pose2& start)
+    : w_trig_(camera.wTrig()),
+      rotation_radius_px_(0.38247 * camera.width()),  // empirical factor below eq. 6.8
+      divisor_(config.adapt_g0_divisor),
+      min_(config.adapt_g0_min),
+      max_(config.adapt_g0_max),
+      window_start_(start) {}
+
+double G0Tracker::update(std::uint64_t events, const Pose2& estimate) {
+  window_events_ += events;
+  const double motion_px =
+      std::hypot(estimate.x - window_start_.x, estimate.y - window_start_.y) / w_trig_ +
+      std::abs(std::remainder(estimate.theta - window_start_.theta, 2.0 * M_PI)) *
+          rotation_radius_px_;
+  if (motion_px < 1.0) return 0.0;
+  const double density = static_cast<double>(window_events_) / motion_px;
+  smoothed_ = smoothed_ > 0.0 ? 0.7 * smoothed_ + 0.3 * density : density;
+  window_start_ = estimate;
+  window_events_ = 0;
+  return std::clamp(smoothed_ / divisor_, min_, max_);
 }
 
 EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const CeilingCamera& camera,
@@ -102,10 +130,17 @@ EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const Ceiling
     throw std::invalid_argument("EventParticleFilter: empty likelihood map");
   }
   const EventFilterConfig& f = config_.filter;
-  alpha_ = decayFromInfluence(f.beta, f.g0);
-  diffusion_ = perEventDiffusion(f, camera_);
-  for (int b = 1; b <= f.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
+  setG0(f.g0);
+  g0_tracker_ = G0Tracker(f, camera_, start);
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
+}
+
+void EventParticleFilter::setG0(double g0) {
+  g0_ = g0;
+  alpha_ = decayFromInfluence(config_.filter.beta, g0);
+  diffusion_ = perEventDiffusion(config_.filter, camera_, g0);
+  decay_.clear();
+  for (int b = 1; b <= config_.filter.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
 }
 
 void EventParticleFilter::process(const Event* events, std::size_t count) {
@@ -135,6 +170,10 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
     if (since_resample_ >= f.resample_every) {
       particles_.resampleSystematic(f.reset_scores_on_resample);
       since_resample_ -= f.resample_every;
+      if (f.adapt_g0) {
+        const double g0 = g0_tracker_.update(f.resample_every, estimate());
+        if (g0 > 0.0) setG0(g0);
+      }
     }
   }
 }

@@ -55,12 +55,19 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   for (float& w : kernel_) w = static_cast<float>(w / total);
 
   const EventFilterConfig& f = config_.filter;
-  alpha_ = decayFromInfluence(f.beta, f.g0);
-  diffusion_ = perEventDiffusion(f, camera_);
-  for (int b = 1; b <= f.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
+  setG0(f.g0);
+  g0_tracker_ = G0Tracker(f, camera_, start);
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
   expected_ = start;
   last_normalised_ = start;
+}
+
+void EventSlam2d::setG0(double g0) {
+  g0_ = g0;
+  alpha_ = decayFromInfluence(config_.filter.beta, g0);
+  diffusion_ = perEventDiffusion(config_.filter, camera_, g0);
+  decay_.clear();
+  for (int b = 1; b <= config_.filter.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
 }
 
 void EventSlam2d::process(const Event* events, std::size_t count) {
@@ -87,12 +94,17 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
     i += b;
     processed_ += b;
     since_resample_ += b;
-    if (since_resample_ >= f.resample_every) {
+    const bool resampled = since_resample_ >= f.resample_every;
+    if (resampled) {
       particles_.resampleSystematic(f.reset_scores_on_resample);
       since_resample_ -= f.resample_every;
     }
     // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
     expected_ = particles_.weightedMean();
+    if (resampled && f.adapt_g0) {
+      const double g0 = g0_tracker_.update(f.resample_every, expected_);
+      if (g0 > 0.0) setG0(g0);
+    }
     if (config_.splat == OccurrenceSplat::kExpectedPose) {
       for (int j = 0; j < b; ++j) splat(expected_, index[j], 1.0f);
     } else {

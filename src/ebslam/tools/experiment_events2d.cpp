@@ -88,15 +88,18 @@ Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duratio
   s.ground_truth = std::move(result.ground_truth);
   // Known ceiling map for EB-PF as in fig. 6.8: Canny edges of the ceiling image (here the
   // texture itself, blurred to about half a sensor pixel on the ceiling like CeilingMapConfig).
-  // Texel (col, row) covers region.min + [col, col + 1) * metres_per_texel, so the centre of
-  // texel (0, 0) is region.min + metres_per_texel / 2.
-  cv::Mat texture8, blurred;
+  // Canny puts an edge on one of the two pixels straddling it, a bias of up to half a pixel; at
+  // twice the texture resolution that bias is 2.5 mm. Pixel (col, row) of the edge image covers
+  // region.min + [col, col + 1) * metres_per_texel / 2 (cv::resize keeps pixel centres).
+  cv::Mat texture8, upsampled, blurred;
   texture.convertTo(texture8, CV_8U, 255.0);
-  cv::GaussianBlur(texture8, blurred, cv::Size(), 0.015 / metres_per_texel);
+  cv::resize(texture8, upsampled, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
+  const double edge_pixel_m = 0.5 * metres_per_texel;
+  cv::GaussianBlur(upsampled, blurred, cv::Size(), 0.015 / edge_pixel_m);
   cv::Canny(blurred, s.map.edges, 20, 50);
   s.map.intensity = texture;
-  s.map.metres_per_pixel = metres_per_texel;
-  s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * metres_per_texel);
+  s.map.metres_per_pixel = edge_pixel_m;
+  s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * edge_pixel_m);
   writeEventFile(events_path.string(), s.events, SensorSize{128, 128});
   writeTumTrajectory(gt_path.string(), s.ground_truth);
   cv::imwrite(edges_path.string(), s.map.edges);
@@ -126,6 +129,22 @@ std::pair<double, double> directRmse(const Trajectory& estimated, const Trajecto
   return {std::sqrt(sp / n), std::sqrt(sr / n) * 180.0 / M_PI};
 }
 
+// The thesis smooths the EB-PF path with a mean filter for display (6.5.3); centred moving mean
+// of the positions over 2 * half + 1 estimates.
+Trajectory meanFiltered(const Trajectory& t, int half) {
+  Trajectory out = t;
+  const int n = static_cast<int>(t.size());
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (int j = std::max(0, i - half); j <= std::min(n - 1, i + half); ++j, ++count) {
+      sum += t[j].position;
+    }
+    out[i].position = sum / count;
+  }
+  return out;
+}
+
 std::vector<int> parseList(const std::string& text) {
   std::vector<int> out;
   std::stringstream ss(text);
@@ -141,10 +160,12 @@ int main(int argc, char** argv) {
   std::string data_dir = "../shared/data";
   std::string out_dir = "events2d_runs";
   std::string particles_text = "5,10,25,75";
+  std::string ebpf_resample_text = "25,100";
   double duration_s = 0.0;
   int seeds = 3;
   double failure_m = 0.3;
-  double g0 = 100.0;
+  double g0_ebpf = 60.0;
+  double g0_slam = 30.0;
   int batch = 3;
   app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
       ->capture_default_str();
@@ -154,9 +175,13 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "filter seeds per trajectory")->capture_default_str();
   app.add_option("--slam-particles", particles_text, "EB-SLAM-2D particle counts")
       ->capture_default_str();
+  app.add_option("--ebpf-resample", ebpf_resample_text,
+                 "EB-PF resampling intervals K (the thesis' default is 100)")
+      ->capture_default_str();
   app.add_option("--failure", failure_m, "aligned position RMSE counted as diverged [m]")
       ->capture_default_str();
-  app.add_option("--g0", g0, "G0 for both filters")->capture_default_str();
+  app.add_option("--g0-ebpf", g0_ebpf, "G0 of EB-PF")->capture_default_str();
+  app.add_option("--g0-slam", g0_slam, "G0 of EB-SLAM-2D")->capture_default_str();
   app.add_option("-B,--batch", batch, "batch size B")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -171,8 +196,9 @@ int main(int argc, char** argv) {
       throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
     fs::create_directories(out_dir);
     std::ofstream csv(fs::path(out_dir) / "runs.csv");
-    csv << "trajectory,method,particles,batch,seed,events,duration_s,rmse_pos_m,rmse_rot_deg,"
-           "failed,events_per_s\n";
+    csv << "trajectory,method,particles,batch,resample,seed,events,duration_s,rmse_pos_m,rmse_rot_"
+           "deg,"
+           "failed,events_per_s,rmse_pos_smoothed_m\n";
     const CeilingCamera camera(CameraModel{}, kThesisCeilingHeightM);
     for (const fs::path& mocap : mocap_files) {
       std::string name = mocap.filename().string();
@@ -191,32 +217,53 @@ int main(int argc, char** argv) {
       TrajectoryEvaluationConfig eval;
       eval.estimate_time_offset = false;  // simulated events share the ground truth's clock
 
-      for (int seed = 1; seed <= seeds; ++seed) {
-        EbpfConfig config;
-        config.filter.g0 = g0;
-        config.filter.batch_size = batch;
-        config.filter.seed = static_cast<std::uint64_t>(seed);
-        EventParticleFilter filter(
-            config, camera,
-            makeEdgeLikelihoodMap(run.map.edges, run.map.metres_per_pixel, run.map.origin_m,
-                                  config.gamma * camera.wTrig()),
-            start);
-        Trajectory estimate;
-        const double seconds = tools::runFilter(filter, run.events, 100, estimate);
-        writeTumTrajectory((dir / ("ebpf_s" + std::to_string(seed) + ".tum")).string(), estimate);
-        const auto [pos, rot] = directRmse(estimate, run.ground_truth);
-        const bool failed = !(pos <= failure_m);
-        csv << name << ",ebpf," << config.filter.num_particles << ',' << batch << ',' << seed << ','
-            << run.events.size() << ',' << run_duration << ',' << pos << ',' << rot << ',' << failed
-            << ',' << run.events.size() / seconds << '\n';
-        std::printf("  EB-PF   N=%3d seed %d: RMSE %.2f cm %.2f deg, %.0f events/s\n",
-                    config.filter.num_particles, seed, pos * 100, rot, run.events.size() / seconds);
-        std::fflush(stdout);
+      // Sensor model cached on a 1 cm grid (2 x 2 means of the 5 mm one, which keeps cell
+      // centres): a quarter of the memory, so the per-event lookups stay in cache.
+      const GridMap2f fine =
+          makeEdgeLikelihoodMap(run.map.edges, run.map.metres_per_pixel, run.map.origin_m,
+                                EbpfConfig{}.gamma * camera.wTrig());
+      GridMap2f likelihood(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m,
+                           fine.origin_x_m, fine.origin_y_m);
+      for (int r = 0; r < likelihood.height; ++r) {
+        for (int c = 0; c < likelihood.width; ++c) {
+          likelihood.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
+                                         fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
+        }
+      }
+      for (int k : parseList(ebpf_resample_text)) {
+        for (int seed = 1; seed <= seeds; ++seed) {
+          EbpfConfig config;
+          config.filter.resample_every = k;
+          config.filter.g0 = g0_ebpf;
+          config.filter.batch_size = batch;
+          config.filter.seed = static_cast<std::uint64_t>(seed);
+          EventParticleFilter filter(config, camera, likelihood, start);
+          Trajectory estimate;
+          const double seconds = tools::runFilter(filter, run.events, 100, estimate);
+          writeTumTrajectory(
+              (dir / ("ebpf_K" + std::to_string(k) + "_s" + std::to_string(seed) + ".tum"))
+                  .string(),
+              estimate);
+          const auto [pos, rot] = directRmse(estimate, run.ground_truth);
+          const bool failed = !(pos <= failure_m);
+          const double smoothed = directRmse(meanFiltered(estimate, 10), run.ground_truth).first;
+          csv << name << ",ebpf," << config.filter.num_particles << ',' << batch << ',' << k << ','
+              << seed << ',' << run.events.size() << ',' << run_duration << ',' << pos << ',' << rot
+              << ',' << failed << ',' << run.events.size() / seconds << ',' << smoothed << '\n';
+          std::printf(
+              "  EB-PF   N=%3d K=%3d seed %d: RMSE %.2f cm %.2f deg (smoothed %.2f cm), %.0f "
+              "events/s\n",
+              config.filter.num_particles, k, seed, pos * 100, rot, smoothed * 100,
+              run.events.size() / seconds);
+          std::fflush(stdout);
+          csv.flush();
+          csv.flush();
+        }
       }
       for (int n : parseList(particles_text)) {
         for (int seed = 1; seed <= seeds; ++seed) {
           Ebslam2dConfig config;
-          config.filter.g0 = g0;
+          config.filter.g0 = g0_slam;
           config.filter.batch_size = batch;
           config.filter.num_particles = n;
           config.filter.seed = static_cast<std::uint64_t>(seed);
@@ -228,13 +275,16 @@ int main(int argc, char** argv) {
           if (seed == 1) cv::imwrite((dir / (stem + "_map.png")).string(), mapToImage(slam.map()));
           const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
           const bool failed = !(e.position_rmse_m <= failure_m);
-          csv << name << ",ebslam2d," << n << ',' << batch << ',' << seed << ','
-              << run.events.size() << ',' << run_duration << ',' << e.position_rmse_m << ','
-              << e.rotation_rmse_deg << ',' << failed << ',' << run.events.size() / seconds << '\n';
+          csv << name << ",ebslam2d," << n << ',' << batch << ',' << config.filter.resample_every
+              << ',' << seed << ',' << run.events.size() << ',' << run_duration << ','
+              << e.position_rmse_m << ',' << e.rotation_rmse_deg << ',' << failed << ','
+              << run.events.size() / seconds << ",\n";
           std::printf("  EB-SLAM N=%3d seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n", n, seed,
                       e.position_rmse_m * 100, e.rotation_rmse_deg, failed ? " (diverged)" : "",
                       run.events.size() / seconds);
           std::fflush(stdout);
+          csv.flush();
+          csv.flush();
         }
       }
     }

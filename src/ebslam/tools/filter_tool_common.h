@@ -55,6 +55,11 @@ inline void addFilterOptions(CLI::App& app, EventFilterConfig& f) {
       ->capture_default_str();
   app.add_flag("--best-particle", "report the best particle instead of the weighted mean")
       ->each([&f](const std::string&) { f.estimate = PoseEstimateMode::kBestParticle; });
+  app.add_flag("--reset-scores", f.reset_scores_on_resample,
+               "reset all scores to their mean on resampling (default: children inherit)");
+  app.add_flag("--adapt-g0", f.adapt_g0, "estimate G0 online from events per pixel of motion");
+  app.add_option("--adapt-g0-divisor", f.adapt_g0_divisor, "adaptive G0 = events/pixel / this")
+      ->capture_default_str();
   app.add_option("--seed", f.seed, "random seed")->capture_default_str();
 }
 

@@ -42,6 +42,16 @@ struct EventFilterConfig {
   /// Children keep their parent's score on resampling (false) or all scores are reset to the
   /// mean (true).
   bool reset_scores_on_resample = false;
+  /// Re-estimate G0 online (7.2.4 asks for G0 from the data; see G0Tracker) instead of keeping
+  /// `g0` fixed; `g0` is then the starting value.
+  bool adapt_g0 = false;
+  /// Adaptive G0: the measured events per pixel of image motion divided by this factor. The
+  /// diffusion has to cover the motion between resamplings, so the effective G0 is well below
+  /// the raw event density; 50 was found on the synthetic test scene (test/synthetic_ceiling.h,
+  /// about 2000 events per pixel, best fixed G0 50-100).
+  double adapt_g0_divisor = 50.0;
+  double adapt_g0_min = 5.0;  ///< clamp of the adapted G0
+  double adapt_g0_max = 1000.0;
   PoseEstimateMode estimate = PoseEstimateMode::kWeightedMean;
   std::uint64_t seed = 1;  ///< seeds the particle noise and resampling
 
@@ -78,7 +88,30 @@ struct Diffusion {
   double sigma_xy_m = 0.0;
   double sigma_theta_rad = 0.0;
 };
-Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera);
+Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera,
+                            double g0);
+
+/// Online G0 from the event stream and the pose estimate: events per pixel of image motion
+/// (eq. 6.6 and 6.8 inverted, E = G0 x / W_trig + 0.38 S G0 theta), measured over windows of at
+/// least one pixel of net motion of the estimate (net, so that estimate jitter does not count as
+/// motion), exponentially smoothed; the G0 to use is that density / adapt_g0_divisor, clamped.
+class G0Tracker {
+ public:
+  G0Tracker() = default;
+  G0Tracker(const EventFilterConfig& config, const CeilingCamera& camera, const Pose2& start);
+  /// Adds `events` processed events and the current estimate; returns a new G0 when a window
+  /// completes, otherwise 0.
+  double update(std::uint64_t events, const Pose2& estimate);
+  double eventsPerPixel() const { return smoothed_; }
+
+ private:
+  double w_trig_ = 0.03;
+  double rotation_radius_px_ = 49.0;
+  double divisor_ = 50.0, min_ = 5.0, max_ = 1000.0;
+  Pose2 window_start_;
+  std::uint64_t window_events_ = 0;
+  double smoothed_ = 0.0;
+};
 
 class EventParticleFilter {
  public:
@@ -102,9 +135,15 @@ class EventParticleFilter {
   const Diffusion& diffusion() const { return diffusion_; }
   const GridMap2f& likelihood() const { return likelihood_; }
   const EbpfConfig& config() const { return config_; }
+  /// G0 in use (changes with config.filter.adapt_g0).
+  double g0() const { return g0_; }
 
  private:
+  void setG0(double g0);
+
   EbpfConfig config_;
+  double g0_ = 0.0;
+  G0Tracker g0_tracker_;
   CeilingCamera camera_;
   GridMap2f likelihood_;
   ParticleSet2D particles_;

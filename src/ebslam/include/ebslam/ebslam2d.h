@@ -11,9 +11,10 @@
 //  - map M = O / (Z + Z0) (eq. 7.5), updated where O or Z change. Z0 > 0 is a prior count of
 //    possible observations that keeps barely observed cells from dividing by ~0 (alg. 8 sets
 //    M = 0 where Z = 0, which would leave the map empty until the pose estimate first moves).
-// G0 feedback (7.2.4): the diffusion and decay use the configured G0 and are not re-estimated
-// from M, which rules out the self-reinforcing loop low G0 -> more diffusion -> larger Z ->
-// smaller M -> lower G0 described in the thesis.
+// G0 feedback (7.2.4): G0 is not estimated from M, which rules out the self-reinforcing loop
+// low G0 -> more diffusion -> larger Z -> smaller M -> lower G0 described in the thesis. It is
+// either fixed (config.filter.g0) or, with config.filter.adapt_g0, measured from the event count
+// per pixel of net image motion of p_* (G0Tracker), which does not depend on M.
 
 #include <cstddef>
 #include <cstdint>
@@ -82,8 +83,10 @@ class EventSlam2d {
   std::uint64_t normalisationUpdates() const { return normalisation_updates_; }
   double alpha() const { return alpha_; }
   const Ebslam2dConfig& config() const { return config_; }
+  double g0() const { return g0_; }
 
  private:
+  void setG0(double g0);
   void splat(const Pose2& pose, std::uint32_t pixel, float weight);
   void updateNormalisation(const Pose2& from, const Pose2& to);
   double imageMotionPx(const Pose2& a, const Pose2& b) const;
@@ -103,6 +106,8 @@ class EventSlam2d {
   double alpha_ = 0.0;
   Diffusion diffusion_;
   std::vector<BatchDecay> decay_;
+  double g0_ = 0.0;
+  G0Tracker g0_tracker_;
   Pose2 expected_;
   Pose2 last_normalised_;
   std::uint64_t processed_ = 0;
