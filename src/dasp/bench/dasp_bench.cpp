@@ -211,8 +211,11 @@ void BM_DaspCount(benchmark::State& state) {
 }
 BENCHMARK(BM_DaspCount)
     ->ArgName("K")
-    ->RangeMultiplier(2)
-    ->Range(250, 4000)
+    ->Arg(250)
+    ->Arg(500)
+    ->Arg(1000)
+    ->Arg(2000)
+    ->Arg(4000)
     ->Unit(benchmark::kMillisecond);
 
 // Records the mean real time per run name, to print the DASP / SLIC ratio at the end.

@@ -16,7 +16,10 @@ namespace dasp {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-constexpr int kChunks = 16;  // fixed row stripes: same reductions for any thread count
+constexpr int kChunks = 16;  // fixed row stripes of the assignment
+// Fixed row stripes of the update, each with its own accumulators (same reductions for any
+// thread count); few, because zeroing and summing them costs K * stripes.
+constexpr int kUpdateChunks = 4;
 constexpr float kUnreached = 1e30f;
 constexpr float kInvalidPixel = -1.0f;  // distance of pixels no cluster may take
 
@@ -142,11 +145,14 @@ struct Dalic::Impl {
     const PixelFeatures& f = self.features_;
     const DalicParams& p = self.params_;
     ClusterTerms t{};
-    const float half = std::ceil(p.window_multiple * c.radius_px);
-    t.x0 = std::max(0, static_cast<int>(std::floor(c.u - half)));
-    t.x1 = std::min(f.width - 1, static_cast<int>(std::ceil(c.u + half)));
-    t.y0 = std::max(0, static_cast<int>(std::floor(c.v - half)));
-    t.y1 = std::min(f.height - 1, static_cast<int>(std::ceil(c.v + half)));
+    // Integer bounding box of the disc |u - u_i| <= C R + 1 px (alg. 3; the pixel of margin
+    // keeps tiny superpixels reachable), not rounded outwards further: the window's pixel count
+    // per cluster pixel must not grow much as superpixels get small.
+    const float half = p.window_multiple * c.radius_px + 1.0f;
+    t.x0 = std::max(0, static_cast<int>(std::ceil(c.u - half)));
+    t.x1 = std::min(f.width - 1, static_cast<int>(std::floor(c.u + half)));
+    t.y0 = std::max(0, static_cast<int>(std::ceil(c.v - half)));
+    t.y1 = std::min(f.height - 1, static_cast<int>(std::floor(c.v + half)));
     t.u = c.u;
     t.v = c.v;
     t.r = c.color.x();
@@ -281,78 +287,79 @@ void Dalic::update() {
   if (k_count == 0) return;
   const bool depth = f.hasDepth();
   const std::size_t stride = static_cast<std::size_t>(kAccSize) * k_count;
-  accumulators_.assign(stride * kChunks, 0.0f);
+  accumulators_.assign(stride * kUpdateChunks, 0.0f);
   const float* density = density_.ptr<float>();
-  detail::forChunks(f.height, kChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
-    float* acc_base = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
-    // Labels come in horizontal runs: sum each run in registers, then add it once.
-    for (int row = row_begin; row < row_end; ++row) {
-      const std::size_t base = static_cast<std::size_t>(row) * f.width;
-      const int* row_labels = labels_.data() + base;
-      int col = 0;
-      while (col < f.width) {
-        const int k = row_labels[col];
-        int end = col + 1;
-        while (end < f.width && row_labels[end] == k) ++end;
-        if (k >= 0) {
-          const Cluster& c = clusters_[static_cast<std::size_t>(k)];
-          float* a = acc_base + static_cast<std::size_t>(k) * kAccSize;
-          const float dv = static_cast<float>(row) - c.v;
-          const float run = static_cast<float>(end - col);
-          const float first = static_cast<float>(col) - c.u;
-          // Sum of (first + j) and (first + j)^2 for j = 0 .. run - 1.
-          const float su = run * first + 0.5f * run * (run - 1.0f);
-          const float suu = run * first * first + first * run * (run - 1.0f) +
-                            (run - 1.0f) * run * (2.0f * run - 1.0f) / 6.0f;
-          a[kCount] += run;
-          a[kSu] += su;
-          a[kSv] += run * dv;
-          a[kSuu] += suu;
-          a[kSvv] += run * dv * dv;
-          a[kSuv] += su * dv;
-          float sr = 0, sg = 0, sb = 0, mass = 0;
-          for (int x = col; x < end; ++x) {
-            sr += f.r[base + x];
-            sg += f.g[base + x];
-            sb += f.b[base + x];
-            mass += density[base + x];
-          }
-          a[kSr] += sr;
-          a[kSg] += sg;
-          a[kSb] += sb;
-          a[kMass] += mass;
-          if (depth) {
-            const float cx = c.position.x(), cy = c.position.y(), cz = c.position.z();
-            float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
-            for (int x = col; x < end; ++x) {
-              const std::size_t i = base + x;
-              const float dx = f.x[i] - cx, dy = f.y[i] - cy, dz = f.z[i] - cz;
-              sx += dx;
-              sy += dy;
-              sz += dz;
-              sxx += dx * dx;
-              sxy += dx * dy;
-              sxz += dx * dz;
-              syy += dy * dy;
-              syz += dy * dz;
-              szz += dz * dz;
+  detail::forChunks(
+      f.height, kUpdateChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
+        float* acc_base = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
+        // Labels come in horizontal runs: sum each run in registers, then add it once.
+        for (int row = row_begin; row < row_end; ++row) {
+          const std::size_t base = static_cast<std::size_t>(row) * f.width;
+          const int* row_labels = labels_.data() + base;
+          int col = 0;
+          while (col < f.width) {
+            const int k = row_labels[col];
+            int end = col + 1;
+            while (end < f.width && row_labels[end] == k) ++end;
+            if (k >= 0) {
+              const Cluster& c = clusters_[static_cast<std::size_t>(k)];
+              float* a = acc_base + static_cast<std::size_t>(k) * kAccSize;
+              const float dv = static_cast<float>(row) - c.v;
+              const float run = static_cast<float>(end - col);
+              const float first = static_cast<float>(col) - c.u;
+              // Sum of (first + j) and (first + j)^2 for j = 0 .. run - 1.
+              const float su = run * first + 0.5f * run * (run - 1.0f);
+              const float suu = run * first * first + first * run * (run - 1.0f) +
+                                (run - 1.0f) * run * (2.0f * run - 1.0f) / 6.0f;
+              a[kCount] += run;
+              a[kSu] += su;
+              a[kSv] += run * dv;
+              a[kSuu] += suu;
+              a[kSvv] += run * dv * dv;
+              a[kSuv] += su * dv;
+              float sr = 0, sg = 0, sb = 0, mass = 0;
+              for (int x = col; x < end; ++x) {
+                sr += f.r[base + x];
+                sg += f.g[base + x];
+                sb += f.b[base + x];
+                mass += density[base + x];
+              }
+              a[kSr] += sr;
+              a[kSg] += sg;
+              a[kSb] += sb;
+              a[kMass] += mass;
+              if (depth) {
+                const float cx = c.position.x(), cy = c.position.y(), cz = c.position.z();
+                float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+                for (int x = col; x < end; ++x) {
+                  const std::size_t i = base + x;
+                  const float dx = f.x[i] - cx, dy = f.y[i] - cy, dz = f.z[i] - cz;
+                  sx += dx;
+                  sy += dy;
+                  sz += dz;
+                  sxx += dx * dx;
+                  sxy += dx * dy;
+                  sxz += dx * dz;
+                  syy += dy * dy;
+                  syz += dy * dz;
+                  szz += dz * dz;
+                }
+                a[kSx] += sx;
+                a[kSy] += sy;
+                a[kSz] += sz;
+                a[kSxx] += sxx;
+                a[kSxy] += sxy;
+                a[kSxz] += sxz;
+                a[kSyy] += syy;
+                a[kSyz] += syz;
+                a[kSzz] += szz;
+              }
             }
-            a[kSx] += sx;
-            a[kSy] += sy;
-            a[kSz] += sz;
-            a[kSxx] += sxx;
-            a[kSxy] += sxy;
-            a[kSxz] += sxz;
-            a[kSyy] += syy;
-            a[kSyz] += syz;
-            a[kSzz] += szz;
+            col = end;
           }
         }
-        col = end;
-      }
-    }
-  });
-  for (int chunk = 1; chunk < kChunks; ++chunk) {
+      });
+  for (int chunk = 1; chunk < kUpdateChunks; ++chunk) {
     const float* src = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
     for (std::size_t j = 0; j < stride; ++j) accumulators_[j] += src[j];
   }

@@ -322,7 +322,8 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
     const Eigen::Vector3d mean = s.position / s.n;
     sp.position = (s.reference + mean).cast<float>();
     const Eigen::Matrix3d cov = s.scatter / s.n - mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(cov);  // closed form: per-superpixel cost must not grow with K
     const Eigen::Vector3d w = solver.eigenvalues().cwiseMax(0.0);  // ascending
     Eigen::Vector3d normal = s.n >= 3.0 ? Eigen::Vector3d(solver.eigenvectors().col(0)) : s.normal;
     if (!(normal.norm() > 0.0)) normal = -Eigen::Vector3d::UnitZ();
