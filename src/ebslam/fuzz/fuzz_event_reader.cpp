@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <sstream>
@@ -58,6 +59,8 @@ void check(const std::string& bytes, const ebslam::EventReadOptions& options) {
 // Whatever was read must survive a write/read round trip through every format.
 void roundTrip(const Outcome& read) {
   static const std::string path = "/dev/shm/ebslam_fuzz_events_" + std::to_string(::getpid());
+  static const int registered = std::atexit([] { std::remove(path.c_str()); });
+  (void)registered;
   if (read.events.empty() || read.sensor.height > 32768 || read.sensor.width > 65535) return;
   for (auto format : {ebslam::EventFileFormat::kBinary, ebslam::EventFileFormat::kText,
                       ebslam::EventFileFormat::kRpgText}) {

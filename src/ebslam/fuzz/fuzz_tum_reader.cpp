@@ -15,6 +15,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::string path = "/dev/shm/ebslam_fuzz_tum_" + std::to_string(::getpid());
+  static const int registered = std::atexit([] { std::remove(path.c_str()); });
+  (void)registered;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) std::abort();
   if (size > 0 && std::fwrite(data, 1, size, file) != size) std::abort();
