@@ -16,10 +16,12 @@ int main(int argc, char** argv) {
   double rate = 200000;
   int baud = 4000000;
   std::string format = "E2";
+  bool no_infer = false;
   app.add_option("--events", count, "number of events");
   app.add_option("--rate", rate, "generator rate [events/s] (capped by the line rate)");
   app.add_option("--baud", baud, "emulated line rate [bit/s]; 0 = unlimited");
   app.add_option("--format", format, "event format E0..E4");
+  app.add_flag("--no-host-wraps", no_infer, "do not infer hidden wraps from host time");
   CLI11_PARSE(app, argc, argv);
   try {
     const auto f = edvs_driver::parseEventFormat(format, edvs_driver::Firmware::kCurrent);
@@ -34,6 +36,7 @@ int main(int argc, char** argv) {
     dc.uri = emulator.uri();
     dc.format = *f;
     dc.command_gap_ms = 2;
+    dc.infer_wraps_from_host_time = !no_infer;
     edvs_driver::EdvsDevice device(dc);
     device.open();
     ebslam::EventVector got;
@@ -53,7 +56,11 @@ int main(int argc, char** argv) {
                         got[i].polarity == sent[i].polarity &&
                         (*f == edvs_driver::EventFormat::kNone ||
                          got[i].t_us - got[0].t_us == sent[i].t_us - sent[0].t_us);
-      if (!same) ++mismatched;
+      if (!same && mismatched++ == 0) {
+        std::printf("first altered event %zu: got t=%lld x=%u y=%u, sent t=%lld x=%u y=%u\n", i,
+                    static_cast<long long>(got[i].t_us - got[0].t_us), got[i].x, got[i].y,
+                    static_cast<long long>(sent[i].t_us - sent[0].t_us), sent[i].x, sent[i].y);
+      }
     }
     const std::size_t lost = sent.size() > got.size() ? sent.size() - got.size() : 0;
     const double bytes = static_cast<double>(device.stats().bytes_read);
@@ -61,6 +68,9 @@ int main(int argc, char** argv) {
         "format %s  line %d bit/s  events %zu/%zu  lost %zu  altered %zu  dropped bytes %lu\n",
         toString(*f), baud, got.size(), sent.size(), lost, mismatched,
         static_cast<unsigned long>(device.stats().parser.bytes_dropped));
+    std::printf("wraps %lu (inferred from host time %lu)\n",
+                static_cast<unsigned long>(device.stats().parser.wraps),
+                static_cast<unsigned long>(device.stats().parser.wraps_from_host_time));
     std::printf("time %.3f s  rate %.0f events/s  %.0f bytes/s (%.2f Mbit/s 8N1)\n", seconds,
                 got.size() / seconds, bytes / seconds, bytes * 10 / seconds / 1e6);
     return lost == 0 && mismatched == 0 ? 0 : 1;

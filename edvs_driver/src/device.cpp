@@ -159,6 +159,7 @@ EdvsDevice::EdvsDevice(DeviceConfig config, TransportFactory factory)
   ParserConfig pc;
   pc.format = format_;
   pc.on_bit = config_.on_bit;
+  pc.infer_wraps_from_host_time = config_.infer_wraps_from_host_time;
   parser_ = EventParser(pc);
   buffer_.resize(1 << 16);
 }
@@ -286,7 +287,10 @@ void EdvsDevice::sendBiases() {
 std::size_t EdvsDevice::read(ebslam::EventVector& out, int timeout_ms) {
   if (!transport_) throw DeviceGone("eDVS not open");
   const std::size_t n = transport_->read(buffer_.data(), buffer_.size(), timeout_ms);
-  if (n == 0) return 0;
+  if (n == 0) {
+    parser_.noteIdle();
+    return 0;
+  }
   stats_.bytes_read += n;
   return parser_.feed(buffer_.data(), n, monotonicMicros(), out);
 }

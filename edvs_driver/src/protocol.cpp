@@ -204,6 +204,7 @@ void TimestampUnwrapper::reset() {
   last_raw_ = 0;
   last_unwrapped_ = 0;
   last_host_us_.reset();
+  idle_since_last_ = false;
   wraps_ = 0;
   wraps_from_host_ = 0;
 }
@@ -225,9 +226,13 @@ TimestampUnwrapper::Step TimestampUnwrapper::peek(std::int64_t raw_us,
       s.wraps = 1;
     }
     // Whole periods that the raw values cannot show: the host clock says more time passed.
-    if (s.host_elapsed_us > period_us_ / 2) {
-      const double missing = std::round(static_cast<double>(s.host_elapsed_us - s.step_us) /
-                                        static_cast<double>(period_us_));
+    if (idle_since_last_ && s.host_elapsed_us > period_us_ / 2) {
+      // Rounded down with an eighth of a period of slack for read latency: a host-side stall
+      // with events still queued somewhere must not invent a period; a missed one is worse
+      // only by a period, and the next idle gap is judged afresh.
+      const double missing =
+          std::floor(static_cast<double>(s.host_elapsed_us - s.step_us + period_us_ / 8) /
+                     static_cast<double>(period_us_));
       if (missing >= 1.0) {
         const auto k = static_cast<std::int64_t>(missing);
         s.step_us += k * period_us_;
@@ -253,6 +258,7 @@ std::int64_t TimestampUnwrapper::commit(std::int64_t raw_us, std::optional<std::
   last_raw_ = raw_us;
   wraps_ += step.wraps;
   wraps_from_host_ += step.wraps_from_host;
+  idle_since_last_ = false;
   return last_unwrapped_;
 }
 

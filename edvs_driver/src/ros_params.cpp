@@ -52,6 +52,8 @@ DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
   p.device.on_bit = pnh.param("on_bit", p.device.on_bit);
   p.device.banner_timeout_ms = pnh.param("banner_timeout", p.device.banner_timeout_ms);
   p.device.command_gap_ms = pnh.param("command_gap", p.device.command_gap_ms);
+  p.device.infer_wraps_from_host_time =
+      pnh.param("infer_wraps_from_host_time", p.device.infer_wraps_from_host_time);
   if (p.device.command_gap_ms < 0) bad("command_gap", "must be >= 0 ms");
   p.frame_id = pnh.param<std::string>("frame_id", p.frame_id);
   p.camera_name = pnh.param<std::string>("camera_name", p.camera_name);

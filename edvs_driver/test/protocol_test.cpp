@@ -352,10 +352,25 @@ TEST(Parser, GapLongerThanWrapPeriodRecoveredFromHostTime) {
   edvs_driver::encodeEvent(truth[1], cfg.format, 0, 1, a);
   edvs_driver::encodeEvent(truth[2], cfg.format, 0, 1, b);
   parser.feed(a, 5'000'000, out);
+  parser.noteIdle();                          // reads in between returned nothing
   parser.feed(b, 5'000'000 + 251'000, out);  // host saw it 251 ms later (1 ms latency)
   ASSERT_EQ(out.size(), 3u);
   EXPECT_EQ(out[2].t_us - out[0].t_us, truth[2].t_us - truth[0].t_us);
   EXPECT_EQ(parser.stats().wraps_from_host_time, 3u);
+
+  // The same host gap without an idle line (a backlog: the reader was late, the device was
+  // held back by flow control) must not add periods.
+  EventParser busy(cfg);
+  EventVector out3;
+  std::vector<std::uint8_t> c;
+  ebslam::Event late = truth[1];
+  late.t_us += 300;
+  edvs_driver::encodeEvent(late, cfg.format, 0, 1, c);
+  busy.feed(a, 5'000'000, out3);
+  busy.feed(c, 5'000'000 + 251'000, out3);
+  ASSERT_EQ(out3.size(), 3u);
+  EXPECT_EQ(out3[2].t_us - out3[1].t_us, 300);
+  EXPECT_EQ(busy.stats().wraps_from_host_time, 0u);
 
   // Without host time the gap folds into one period, but time still does not run backwards.
   EventParser blind(cfg);

@@ -51,10 +51,11 @@ struct DeviceConfig {
   EventFormat format = EventFormat::kAbs16;
   Firmware firmware = Firmware::kCurrent;  ///< overridden by the URI's firmware= if given
   SyncMode sync = SyncMode::kNone;
-  int on_bit = 1;                ///< polarity bit meaning ON (see protocol.h)
-  int banner_timeout_ms = 1500;  ///< wait for the reset banner [ms]
-  int command_gap_ms = 10;       ///< pause after each command [ms]
-  bool require_banner = true;    ///< fail the open if no banner arrives (no device there)
+  int on_bit = 1;                          ///< polarity bit meaning ON (see protocol.h)
+  int banner_timeout_ms = 1500;            ///< wait for the reset banner [ms]
+  int command_gap_ms = 10;                 ///< pause after each command [ms]
+  bool require_banner = true;              ///< fail the open if no banner arrives (no device there)
+  bool infer_wraps_from_host_time = true;  ///< see ParserConfig
 };
 
 /// Counters of one device, cumulative over reconnects of the same EdvsDevice.

@@ -120,6 +120,10 @@ struct ParserConfig {
   /// device clock is taken to have jumped (e.g. a timestamp reset) and the stream is accepted
   /// again, continuing monotonically from the last accepted time.
   bool reject_implausible = true;
+  /// Add wrap periods that a quiet gap hid, judged from host time after an idle read (see
+  /// TimestampUnwrapper). Right for a real device; wrong when the host stalls for more than
+  /// ~7/8 of a period while the device side also paused with events queued.
+  bool infer_wraps_from_host_time = true;
   int max_consecutive_rejections = 8;
 };
 
@@ -140,8 +144,11 @@ struct ParserStats {
 ///
 /// Each raw value is taken as the smallest forward step from the previous one (modulo the wrap
 /// period). A gap longer than one wrap period cannot be seen in the raw values; when the host
-/// time at which the bytes arrived is known, whole periods that must have passed are added back
-/// (host elapsed time minus device step, rounded to whole periods).
+/// time at which the bytes arrived is known AND the line was seen idle in between (noteIdle()),
+/// whole periods that must have passed are added back (host elapsed time minus device step,
+/// rounded down to whole periods with 1/8 period of slack). The idle condition matters: while the
+/// line is busy (a backlog held back by flow control or a slow reader) host time says nothing about
+/// device time.
 class TimestampUnwrapper {
  public:
   /// period_us: wrap period (2^bits) [us]; 0 means the input is already a 64-bit time.
@@ -170,11 +177,15 @@ class TimestampUnwrapper {
   std::int64_t last() const { return last_unwrapped_; }
   std::uint64_t wraps() const { return wraps_; }
   std::uint64_t wrapsFromHostTime() const { return wraps_from_host_; }
+  /// The line delivered no bytes at some point since the last committed value: the device had
+  /// nothing queued, so host time since then is device time too.
+  void noteIdle() { idle_since_last_ = true; }
   void reset();
 
  private:
   std::int64_t period_us_;
   bool delta_;
+  bool idle_since_last_ = false;
   bool started_ = false;
   std::int64_t last_raw_ = 0;
   std::int64_t last_unwrapped_ = 0;
@@ -216,6 +227,10 @@ class EventParser {
   const ParserStats& stats() const { return stats_; }
   /// Bytes of an incomplete event held back, waiting for the next feed().
   std::size_t pendingBytes() const { return pending_; }
+  /// Tells the parser that a read returned no bytes (the line was idle); see TimestampUnwrapper.
+  void noteIdle() {
+    if (config_.infer_wraps_from_host_time) unwrapper_.noteIdle();
+  }
 
   /// True when the stream does not look like `config().format`: after at least
   /// `min_events` events, more than `max_ratio` of the bytes were dropped or of the events
