@@ -181,10 +181,10 @@ class Renderer {
     const std::size_t pixel_count = rays_.size() / samples_per_pixel_;
     intensity.resize(pixel_count);
     const float inv_samples = 1.0f / static_cast<float>(samples_per_pixel_);
-    if (planes_.size() == 1 && samples_per_pixel_ == 1) {
+    if (planes_.size() == 1) {
       // Fast path for the ceiling scenario: plane coordinates of all rays in single precision
       // (vectorisable; texel coordinates stay below 1e4, so float resolves 1e-3 texel), then
-      // the texture lookups.
+      // the texture lookups, averaged over the supersamples of each pixel.
       const PreparedPlane& plane = planes_[0];
       const PlaneProjection& p = projections_[0];
       const float dx = static_cast<float>(p.denominator.x());
@@ -197,9 +197,10 @@ class Renderer {
       const float vy = static_cast<float>(p.numerator_v.y());
       const float vz = static_cast<float>(p.numerator_v.z());
       const float h = static_cast<float>(p.h);
-      texel_u_.resize(pixel_count);
-      texel_v_.resize(pixel_count);
-      for (std::size_t i = 0; i < pixel_count; ++i) {
+      const std::size_t ray_count = rays_.size();
+      texel_u_.resize(ray_count);
+      texel_v_.resize(ray_count);
+      for (std::size_t i = 0; i < ray_count; ++i) {
         const float x = ray_x_[i];
         const float y = ray_y_[i];
         const float den = dx * x + dy * y + dz;
@@ -210,12 +211,22 @@ class Renderer {
       }
       const auto extent_u = static_cast<float>(plane.extent_u);
       const auto extent_v = static_cast<float>(plane.extent_v);
-      for (std::size_t i = 0; i < pixel_count; ++i) {
-        const float u = texel_u_[i];
-        const float v = texel_v_[i];
-        intensity[i] = (u >= 0.0f && v >= 0.0f && u <= extent_u && v <= extent_v)
-                           ? sampleTexture(plane, u, v)
-                           : background_;
+      auto sample = [&](std::size_t ray) {
+        const float u = texel_u_[ray];
+        const float v = texel_v_[ray];
+        return (u >= 0.0f && v >= 0.0f && u <= extent_u && v <= extent_v)
+                   ? sampleTexture(plane, u, v)
+                   : background_;
+      };
+      if (samples_per_pixel_ == 1) {
+        for (std::size_t i = 0; i < pixel_count; ++i) intensity[i] = sample(i);
+      } else {
+        const auto spp = static_cast<std::size_t>(samples_per_pixel_);
+        for (std::size_t i = 0; i < pixel_count; ++i) {
+          float sum = 0.0f;
+          for (std::size_t k = 0; k < spp; ++k) sum += sample(i * spp + k);
+          intensity[i] = sum * inv_samples;
+        }
       }
       return;
     }

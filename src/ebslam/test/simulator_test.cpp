@@ -136,6 +136,27 @@ TEST(EventSimulator, RenderedImageFollowsTheCeilingProjectionOfEq635) {
   EXPECT_LT((world - dot_world).norm(), 0.03) << "one pixel is W_trig = 3 cm";
 }
 
+// Supersampling integrates the pixel area by rays instead of by the texture pre-filter: both
+// renderings of the same view agree up to aliasing residue.
+TEST(EventSimulator, SupersamplingAgreesWithPrefilteredRendering) {
+  const Scene scene = ceilingWith(makeLinesAndCirclesTexture(), 0.005);
+  SimulatorConfig config = noiselessConfig();
+  const StampedPose pose = se2ToFloorPose(0.0, 0.3, -0.2, 0.4);
+  Eigen::Isometry3d camera_pose = Eigen::Isometry3d::Identity();
+  camera_pose.linear() = pose.orientation.toRotationMatrix();
+  camera_pose.translation() = pose.position;
+  const cv::Mat single = EventSimulator(config).renderIntensity(scene, camera_pose);
+  config.supersampling = 3;
+  const cv::Mat super = EventSimulator(config).renderIntensity(scene, camera_pose);
+  cv::Mat difference;
+  cv::absdiff(single, super, difference);
+  EXPECT_LT(cv::mean(difference)[0], 0.006);
+  double max_difference = 0.0;
+  cv::minMaxLoc(difference, nullptr, &max_difference);
+  EXPECT_LT(max_difference, 0.08);
+  EXPECT_GT(cv::mean(super)[0], 0.5);  // the bright ceiling, not the background
+}
+
 // Eq. 6.6: moving a distance x parallel to a plane at distance D with G0 effective feature points
 // in view gives E_x = x f G0 / D events. Texture: vertical stripes of period P alternating
 // between two log intensities dL apart. The field of view (W D / f metres wide) holds
