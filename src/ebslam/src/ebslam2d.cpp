@@ -37,6 +37,7 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   normalisation_ = GridMap2f(cells, cells, res, ox, oy);
   map_ = GridMap2f(cells, cells, res, ox, oy);
   z0_ = static_cast<float>(config_.normalisation_prior_px);
+  inverse_normalisation_ = GridMap2f(cells, cells, res, ox, oy, 1.0f / z0_);
 
   // Precomputed Gaussian splat kernel (7.2.4), normalised to sum 1: O counts events.
   const double sigma_cells = config_.splat_sigma_wtrig / config_.cell_size_wtrig;
@@ -106,13 +107,17 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
       if (g0 > 0.0) setG0(g0);
     }
     if (config_.splat == OccurrenceSplat::kExpectedPose) {
-      for (int j = 0; j < b; ++j) splat(expected_, index[j], 1.0f);
+      const double c = std::cos(expected_.theta);
+      const double s = std::sin(expected_.theta);
+      for (int j = 0; j < b; ++j) splat(expected_, c, s, index[j], 1.0f);
     } else {
       for (int p = 0; p < particles_.size(); ++p) {
         const auto w = static_cast<float>(particles_.normalisedWeight(p));
         if (w <= 0.0f) continue;
         const Pose2 pose = particles_.particle(p);
-        for (int j = 0; j < b; ++j) splat(pose, index[j], w);
+        const double c = std::cos(pose.theta);
+        const double s = std::sin(pose.theta);
+        for (int j = 0; j < b; ++j) splat(pose, c, s, index[j], w);
       }
     }
     // Normalisation (eq. 7.7), periodically: once the expected pose moved the image enough.
@@ -127,11 +132,9 @@ Pose2 EventSlam2d::estimate() const {
   return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best() : expected_;
 }
 
-void EventSlam2d::splat(const Pose2& pose, std::uint32_t pixel, float weight) {
+void EventSlam2d::splat(const Pose2& pose, double c, double s, std::uint32_t pixel, float weight) {
   const double ox = camera_.offsetX()[pixel];
   const double oy = camera_.offsetY()[pixel];
-  const double c = std::cos(pose.theta);
-  const double s = std::sin(pose.theta);
   const double wx = pose.x + c * ox - s * oy;
   const double wy = pose.y + s * ox + c * oy;
   const double inv = occurrence_.invResolution();
@@ -146,8 +149,9 @@ void EventSlam2d::splat(const Pose2& pose, std::uint32_t pixel, float weight) {
   for (int dy = -r; dy <= r; ++dy) {
     const std::size_t base = static_cast<std::size_t>(row + dy) * occurrence_.width + col - r;
     for (int dx = 0; dx < side; ++dx) {
-      occurrence_.data[base + dx] += weight * k[(dy + r) * side + dx];
-      refreshMapCell(base + dx);
+      const std::size_t cell = base + dx;
+      occurrence_.data[cell] += weight * k[(dy + r) * side + dx];
+      map_.data[cell] = occurrence_.data[cell] * inverse_normalisation_.data[cell];
     }
   }
 }
@@ -216,7 +220,8 @@ void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
       const double du = ua - ub;
       const double dv = va - vb;
       normalisation_.data[k] += static_cast<float>(std::sqrt(du * du + dv * dv));  // eq. 7.7
-      refreshMapCell(k);
+      inverse_normalisation_.data[k] = 1.0f / (normalisation_.data[k] + z0_);
+      map_.data[k] = occurrence_.data[k] * inverse_normalisation_.data[k];
     }
   }
 }

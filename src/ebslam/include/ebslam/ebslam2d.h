@@ -87,12 +87,10 @@ class EventSlam2d {
 
  private:
   void setG0(double g0);
-  void splat(const Pose2& pose, std::uint32_t pixel, float weight);
+  /// c, s: cos and sin of pose.theta.
+  void splat(const Pose2& pose, double c, double s, std::uint32_t pixel, float weight);
   void updateNormalisation(const Pose2& from, const Pose2& to);
   double imageMotionPx(const Pose2& a, const Pose2& b) const;
-  void refreshMapCell(std::size_t k) {
-    map_.data[k] = occurrence_.data[k] / (normalisation_.data[k] + z0_);
-  }
 
   Ebslam2dConfig config_;
   CeilingCamera camera_;
@@ -100,7 +98,8 @@ class EventSlam2d {
   GridMap2f occurrence_;
   GridMap2f normalisation_;
   GridMap2f map_;
-  std::vector<float> kernel_;  // (2 r + 1)^2 Gaussian weights summing to 1
+  GridMap2f inverse_normalisation_;  // 1 / (Z + Z0), so that a splat needs no division
+  std::vector<float> kernel_;        // (2 r + 1)^2 Gaussian weights summing to 1
   int kernel_radius_ = 0;
   float z0_ = 1.0f;
   double alpha_ = 0.0;
