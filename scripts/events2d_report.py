@@ -166,7 +166,8 @@ def main():
         md += ["## Speed (Google Benchmark, one core)", "",
                "`ebslam_ebpf_bench`: synthetic ceiling run of about 180k events processed per "
                "iteration; rates from CPU time. Thesis figures: table 6.3 (EB-PF, 2.53 GHz single "
-               "core) and table 7.1 (EB-SLAM-2D).", "",
+               "core) and table 7.1 (EB-SLAM-2D). The machine is shared by several jobs, so repeated "
+               "runs differ by up to about 30 %.", "",
                "| filter | B | N | events/s | thesis events/s | ratio |", "|---|---|---|---|---|---|"]
         for b in bench["benchmarks"]:
             name = b["name"]
