@@ -1,24 +1,101 @@
 #!/usr/bin/env bash
-# Runs launch/demo.launch headless on the sample session, records its outputs into demo_output/
-# and prints a summary (also written to demo_output/summary.txt). Assumes `scripts/ws.sh build`.
+# make demo: the pipeline on the sample session, headless. Assumes `scripts/ws.sh build`.
+#  1. Part II offline: simulate the eDVS on a floor robot under a ceiling along 12 s of a real robot
+#     trajectory (thesis 6.5.3), localise with EB-PF on the known ceiling map and run EB-SLAM-2D,
+#     and score both trajectories against the ground truth.
+#  2. Part I offline: DASP superpixels of every sample RGB-D frame (labels, overlay, list).
+#  3. ROS: an emulated eDVS on a pseudo-terminal streams the simulated events to the eDVS driver
+#     nodelet while the RGB-D source plays the sample frames; rosbag records all topics.
+# Outputs go to demo_output/; the summary is printed and written to demo_output/summary.txt.
 set -eo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 ws="${WS_DIR:-${repo}/.ws}"
 out="${repo}/demo_output"
+session="${repo}/test/data/sample_session"
 source "${repo}/scripts/ros_env.sh"
 set +u
 # shellcheck disable=SC1091
 source "${ws}/devel/setup.bash"
 rm -rf "${out}"
-mkdir -p "${out}"
+mkdir -p "${out}/events2d" "${out}/superpixels" "${out}/logs"
+export PATH="${ws}/devel/bin:${PATH}"
+summary="${out}/summary_offline.txt"
+: >"${summary}"
+note() { echo "$*" | tee -a "${summary}"; }
+
+step() {  # step NAME LOG COMMAND...: runs a step, keeps its log, says how it went
+  local name=$1 log=$2
+  shift 2
+  local start=${SECONDS}
+  if "$@" >"${log}" 2>&1; then
+    echo "demo: ${name} done in $((SECONDS - start)) s"
+  else
+    note "  ${name}: FAILED (see ${log#"${repo}"/})"
+    return 1
+  fi
+}
+
+echo "demo: 1. event simulation, EB-PF and EB-SLAM-2D"
+e2d="${out}/events2d"
+status=0
+if step "event simulation" "${e2d}/simulate.log" ebslam_simulate_events \
+  --trajectory "${session}/pioneer_360_excerpt.txt" --seed 1 \
+  --events "${e2d}/events.bin" --groundtruth "${e2d}/groundtruth.txt" --map "${e2d}/ceiling"; then
+  note "  simulation: $(grep -E '^events:' "${e2d}/simulate.log" | head -1)"
+  origin_x=$(sed -n 's/^origin_x_m: *//p' "${e2d}/ceiling.yaml")
+  origin_y=$(sed -n 's/^origin_y_m: *//p' "${e2d}/ceiling.yaml")
+  if step "EB-PF" "${e2d}/ebpf.log" ebslam_run_ebpf "${e2d}/events.bin" --edges "${e2d}/ceiling_edges.png" \
+    --map-origin "${origin_x}" "${origin_y}" --start-from "${e2d}/groundtruth.txt" -o "${e2d}/ebpf.txt"; then
+    ebslam_evaluate_trajectory "${e2d}/ebpf.txt" "${e2d}/groundtruth.txt" >"${e2d}/ebpf_eval.txt" 2>&1 || status=1
+    note "  EB-PF (known ceiling map): $(grep -E 'position RMSE' "${e2d}/ebpf_eval.txt" | head -1 | tr -s ' '), $(grep -iE 'events/s|events per second' "${e2d}/ebpf.log" | tail -1 | tr -s ' ')"
+  else status=1; fi
+  if step "EB-SLAM-2D" "${e2d}/ebslam2d.log" ebslam_run_ebslam2d "${e2d}/events.bin" \
+    --start-from "${e2d}/groundtruth.txt" -o "${e2d}/ebslam2d.txt" --map-png "${e2d}/ebslam2d_map.png"; then
+    ebslam_evaluate_trajectory "${e2d}/ebslam2d.txt" "${e2d}/groundtruth.txt" >"${e2d}/ebslam2d_eval.txt" 2>&1 || status=1
+    note "  EB-SLAM-2D: $(grep -E 'position RMSE' "${e2d}/ebslam2d_eval.txt" | head -1 | tr -s ' '), $(grep -iE 'events/s|events per second' "${e2d}/ebslam2d.log" | tail -1 | tr -s ' ')"
+  else status=1; fi
+else
+  status=1
+fi
+
+echo "demo: 2. DASP superpixels of the sample frames"
+frames=0
+for rgb in "${session}"/sample*_rgb.png; do
+  name=$(basename "${rgb}" _rgb.png)
+  sp="${out}/superpixels/${name}"
+  if step "DASP ${name}" "${sp}.log" dasp_segment --color "${rgb}" --depth "${session}/${name}_depth_mm.png" \
+    --labels "${sp}_labels.png" --overlay "${sp}_overlay.png" --list "${sp}_superpixels.csv"; then
+    frames=$((frames + 1))
+  else status=1; fi
+done
+note "  DASP: ${frames} frames segmented into demo_output/superpixels; first: $(head -n1 "${out}"/superpixels/sample0.log 2>/dev/null)"
+
+echo "demo: 3. ROS pipeline (emulated eDVS -> driver nodelet, RGB-D source -> rosbag)"
 # A master of our own on a free port, so the demo never talks to another running ROS system.
 port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("localhost", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI="http://localhost:${port}"
 export ROS_LOG_DIR="${out}/logs"
-echo "demo: running launch/demo.launch (master on port ${port}); outputs in ${out}"
-roslaunch -p "${port}" "${repo}/launch/demo.launch" output_dir:="${out}" >"${out}/roslaunch.log" 2>&1 || {
-  echo "demo: roslaunch failed, see ${out}/roslaunch.log" >&2
-  tail -n 30 "${out}/roslaunch.log" >&2
-  exit 1
-}
-/usr/bin/python3 "${repo}/scripts/demo_summary.py" "${out}" | tee "${out}/summary.txt"
+link="/tmp/edvs_demo_$$"
+events_file="${e2d}/events.bin"
+[ -f "${events_file}" ] || events_file="${repo}/ebslam_ros/test/data/events.txt"
+edvs_emulator --link "${link}" --file "${events_file}" --baud 4000000 --duration 60 >"${out}/logs/emulator.log" 2>&1 &
+emulator_pid=$!
+trap 'kill ${emulator_pid} 2>/dev/null || true' EXIT
+for _ in $(seq 50); do [ -e "${link}" ] && break; sleep 0.1; done
+if roslaunch -p "${port}" "${repo}/launch/demo.launch" output_dir:="${out}" \
+  edvs_uri:="serial://${link}?format=E2" >"${out}/roslaunch.log" 2>&1; then
+  /usr/bin/python3 "${repo}/scripts/demo_summary.py" "${out}" >"${out}/summary_ros.txt" || status=1
+else
+  echo "demo: roslaunch failed, see demo_output/roslaunch.log" >&2
+  tail -n 20 "${out}/roslaunch.log" >&2
+  status=1
+fi
+kill "${emulator_pid}" 2>/dev/null || true
+
+{
+  echo "demo summary (outputs in demo_output/)"
+  cat "${summary}"
+  [ -f "${out}/summary_ros.txt" ] && cat "${out}/summary_ros.txt"
+  echo "  result: $([ ${status} -eq 0 ] && echo OK || echo 'PROBLEMS (see above)')"
+} | tee "${out}/summary.txt"
+exit ${status}

@@ -15,6 +15,7 @@ EXPECTED = {
     "/camera/depth/image": "camera_rgb_optical_frame",
     "/camera/rgb/camera_info": "camera_rgb_optical_frame",
     "/edvs/events": "edvs_optical_frame",
+    "/edvs/camera_info": "edvs_optical_frame",
 }
 
 
@@ -35,8 +36,14 @@ def main(out):
     events = 0
     first_event = last_event = None
     saved = set()
+    diagnostics = None
     with rosbag.Bag(bag_path) as bag:
         for topic, msg, _ in bag.read_messages():
+            if topic == "/diagnostics":
+                for status in msg.status:
+                    if "eDVS" in status.name:
+                        diagnostics = status
+                continue
             s = stats.setdefault(topic, {"count": 0, "frames": set(), "first": None, "last": None})
             s["count"] += 1
             s["frames"].add(msg.header.frame_id)
@@ -51,8 +58,7 @@ def main(out):
             if topic in ("/camera/rgb/image", "/camera/depth/image") and topic not in saved:
                 save_png(os.path.join(out, topic.strip("/").replace("/", "_") + "_first.png"), msg)
                 saved.add(topic)
-    print("demo summary")
-    print(f"  recording: {bag_path}")
+    print(f"  ROS recording: {os.path.relpath(bag_path, os.path.dirname(out))}")
     ok = True
     for topic, frame in EXPECTED.items():
         s = stats.get(topic)
@@ -65,9 +71,15 @@ def main(out):
         print(f"  {topic}: {s['count']} messages over {span:.2f} s, frame {frames}")
         ok &= s["frames"] == {frame}
     if events:
-        print(f"  events: {events} in total, {events / max(last_event - first_event, 1e-9):.0f} events/s")
-    print("  pipeline: RGB-D folder source and event file player (DASP, segmentation and SLAM nodes are added by their issues)")
-    print("  result: " + ("OK" if ok else "PROBLEMS (see above)"))
+        print(f"  eDVS driver: {events} events published, {events / max(last_event - first_event, 1e-9):.0f} events/s")
+    else:
+        print("  eDVS driver: no events published")
+        ok = False
+    if diagnostics is not None:
+        values = {kv.key: kv.value for kv in diagnostics.values}
+        keep = ["events published", "dropped bytes", "reconnects"]
+        extra = ", ".join(f"{k} {values[k]}" for k in keep if k in values)
+        print(f"  eDVS diagnostics: {diagnostics.message}" + (f" ({extra})" if extra else ""))
     return 0 if ok else 1
 
 
