@@ -352,7 +352,7 @@ TEST(Parser, GapLongerThanWrapPeriodRecoveredFromHostTime) {
   edvs_driver::encodeEvent(truth[1], cfg.format, 0, 1, a);
   edvs_driver::encodeEvent(truth[2], cfg.format, 0, 1, b);
   parser.feed(a, 5'000'000, out);
-  parser.noteIdle();                          // reads in between returned nothing
+  parser.noteIdle();                         // reads in between returned nothing
   parser.feed(b, 5'000'000 + 251'000, out);  // host saw it 251 ms later (1 ms latency)
   ASSERT_EQ(out.size(), 3u);
   EXPECT_EQ(out[2].t_us - out[0].t_us, truth[2].t_us - truth[0].t_us);

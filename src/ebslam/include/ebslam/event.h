@@ -12,10 +12,10 @@ namespace ebslam {
 /// time since the start of the trajectory. Pixel (0,0) is the top-left pixel (x to the right,
 /// y down), as in dvs_msgs.
 struct Event {
-  std::int64_t t_us = 0;   ///< timestamp [microseconds]
-  std::uint16_t x = 0;     ///< pixel column, 0 = left
-  std::uint16_t y = 0;     ///< pixel row, 0 = top
-  bool polarity = false;   ///< true = ON (brightness increased), false = OFF
+  std::int64_t t_us = 0;  ///< timestamp [microseconds]
+  std::uint16_t x = 0;    ///< pixel column, 0 = left
+  std::uint16_t y = 0;    ///< pixel row, 0 = top
+  bool polarity = false;  ///< true = ON (brightness increased), false = OFF
 
   friend bool operator==(const Event& a, const Event& b) {
     return a.t_us == b.t_us && a.x == b.x && a.y == b.y && a.polarity == b.polarity;
