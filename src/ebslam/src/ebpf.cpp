@@ -135,12 +135,19 @@ EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const Ceiling
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
 }
 
+G0Schedule makeG0Schedule(const EventFilterConfig& config, const CeilingCamera& camera, double g0) {
+  G0Schedule schedule;
+  schedule.g0 = g0;
+  schedule.alpha = decayFromInfluence(config.beta, g0);
+  schedule.diffusion = perEventDiffusion(config, camera, g0);
+  for (int b = 1; b <= config.batch_size; ++b) {
+    schedule.batch_decay.push_back(batchDecay(schedule.alpha, b));
+  }
+  return schedule;
+}
+
 void EventParticleFilter::setG0(double g0) {
-  g0_ = g0;
-  alpha_ = decayFromInfluence(config_.filter.beta, g0);
-  diffusion_ = perEventDiffusion(config_.filter, camera_, g0);
-  decay_.clear();
-  for (int b = 1; b <= config_.filter.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
+  schedule_ = makeG0Schedule(config_.filter, camera_, g0);
 }
 
 void EventParticleFilter::process(const Event* events, std::size_t count) {
@@ -162,8 +169,8 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
     }
     // eq. 6.39: a batch of b events diffuses with b times the per-event variance.
     const double root_b = std::sqrt(static_cast<double>(b));
-    particles_.step(index, b, ox, oy, likelihood_, diffusion_.sigma_xy_m * root_b,
-                    diffusion_.sigma_theta_rad * root_b, decay_[b - 1]);
+    particles_.step(index, b, ox, oy, likelihood_, schedule_.diffusion.sigma_xy_m * root_b,
+                    schedule_.diffusion.sigma_theta_rad * root_b, schedule_.batch_decay[b - 1]);
     i += b;
     processed_ += b;
     since_resample_ += b;

@@ -63,13 +63,7 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   last_normalised_ = start;
 }
 
-void EventSlam2d::setG0(double g0) {
-  g0_ = g0;
-  alpha_ = decayFromInfluence(config_.filter.beta, g0);
-  diffusion_ = perEventDiffusion(config_.filter, camera_, g0);
-  decay_.clear();
-  for (int b = 1; b <= config_.filter.batch_size; ++b) decay_.push_back(batchDecay(alpha_, b));
-}
+void EventSlam2d::setG0(double g0) { schedule_ = makeG0Schedule(config_.filter, camera_, g0); }
 
 void EventSlam2d::process(const Event* events, std::size_t count) {
   if (count == 0) return;
@@ -90,8 +84,8 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
     }
     // Localisation: EB-PF step against the current map M (alg. 8, "update particles").
     const double root_b = std::sqrt(static_cast<double>(b));
-    particles_.step(index, b, ox, oy, map_, diffusion_.sigma_xy_m * root_b,
-                    diffusion_.sigma_theta_rad * root_b, decay_[b - 1]);
+    particles_.step(index, b, ox, oy, map_, schedule_.diffusion.sigma_xy_m * root_b,
+                    schedule_.diffusion.sigma_theta_rad * root_b, schedule_.batch_decay[b - 1]);
     i += b;
     processed_ += b;
     since_resample_ += b;

@@ -91,6 +91,17 @@ struct Diffusion {
 Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera,
                             double g0);
 
+/// Everything that follows from G0 in an event filter: the decay alpha (eq. 6.27), the per-event
+/// diffusion (eq. 6.38) and the score decay of a batch of b = 1..B events (eq. 6.39), indexed b
+/// - 1.
+struct G0Schedule {
+  double g0 = 0.0;
+  double alpha = 0.0;
+  Diffusion diffusion;
+  std::vector<BatchDecay> batch_decay;
+};
+G0Schedule makeG0Schedule(const EventFilterConfig& config, const CeilingCamera& camera, double g0);
+
 /// Online G0 from the event stream and the pose estimate: events per pixel of image motion
 /// (eq. 6.6 and 6.8 inverted, E = G0 x / W_trig + 0.38 S G0 theta), measured over windows of at
 /// least one pixel of net motion of the estimate (net, so that estimate jitter does not count as
@@ -131,25 +142,22 @@ class EventParticleFilter {
   Pose2 estimate() const;
   const ParticleSet2D& particles() const { return particles_; }
   std::uint64_t processedEvents() const { return processed_; }
-  double alpha() const { return alpha_; }
-  const Diffusion& diffusion() const { return diffusion_; }
+  double alpha() const { return schedule_.alpha; }
+  const Diffusion& diffusion() const { return schedule_.diffusion; }
   const GridMap2f& likelihood() const { return likelihood_; }
   const EbpfConfig& config() const { return config_; }
   /// G0 in use (changes with config.filter.adapt_g0).
-  double g0() const { return g0_; }
+  double g0() const { return schedule_.g0; }
 
  private:
   void setG0(double g0);
 
   EbpfConfig config_;
-  double g0_ = 0.0;
   G0Tracker g0_tracker_;
   CeilingCamera camera_;
   GridMap2f likelihood_;
   ParticleSet2D particles_;
-  double alpha_ = 0.0;
-  Diffusion diffusion_;
-  std::vector<BatchDecay> decay_;  // index b - 1 for a batch of b events
+  G0Schedule schedule_;
   std::uint64_t processed_ = 0;
   int since_resample_ = 0;
   std::int64_t last_t_us_;

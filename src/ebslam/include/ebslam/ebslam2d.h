@@ -81,9 +81,9 @@ class EventSlam2d {
   const GridMap2f& map() const { return map_; }
   std::uint64_t processedEvents() const { return processed_; }
   std::uint64_t normalisationUpdates() const { return normalisation_updates_; }
-  double alpha() const { return alpha_; }
+  double alpha() const { return schedule_.alpha; }
   const Ebslam2dConfig& config() const { return config_; }
-  double g0() const { return g0_; }
+  double g0() const { return schedule_.g0; }
 
  private:
   void setG0(double g0);
@@ -102,10 +102,7 @@ class EventSlam2d {
   std::vector<float> kernel_;        // (2 r + 1)^2 Gaussian weights summing to 1
   int kernel_radius_ = 0;
   float z0_ = 1.0f;
-  double alpha_ = 0.0;
-  Diffusion diffusion_;
-  std::vector<BatchDecay> decay_;
-  double g0_ = 0.0;
+  G0Schedule schedule_;
   G0Tracker g0_tracker_;
   Pose2 expected_;
   Pose2 last_normalised_;
