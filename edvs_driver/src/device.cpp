@@ -44,7 +44,7 @@ DeviceUri parseDeviceUri(const std::string& uri) {
   std::string query;
   if (const auto q = rest.find('?'); q != std::string::npos) {
     query = rest.substr(q + 1);
-    rest = rest.substr(0, q);
+    rest.resize(q);
   }
   std::optional<std::string> format_text;
   // Query first: firmware= changes how format= is read.

@@ -69,6 +69,7 @@ void depthAdaptiveRow(const float* __restrict r, const float* __restrict g,
                       const float* __restrict py, const float* __restrict pz,
                       const float* __restrict nx, const float* __restrict ny,
                       const float* __restrict nz, float* __restrict d_row, int* __restrict l_row,
+                      // cppcheck-suppress passedByValue ; a by-value copy keeps the terms in registers
                       int x0, int x1, const ClusterTerms t, float wc, float wn, int id) {
   for (int col = x0; col <= x1; ++col) {
     const float dx = px[col] - t.x, dy = py[col] - t.y, dz = pz[col] - t.z;

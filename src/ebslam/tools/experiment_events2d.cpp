@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
     for (const fs::path& mocap : mocap_files) {
       std::string name = mocap.filename().string();
       name = name.substr(name.find("freiburg2_"));
-      name = name.substr(0, name.find("-groundtruth"));
+      if (const auto end = name.find("-groundtruth"); end != std::string::npos) name.resize(end);
       const fs::path dir = fs::path(out_dir) / name;
       const auto sim_start = std::chrono::steady_clock::now();
       const Simulated run = simulateRun(mocap, dir, duration_s, 1);
