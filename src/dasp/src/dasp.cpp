@@ -60,6 +60,22 @@ Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
   return result;
 }
 
+// DALIC parameters of the RGB-D methods (DASP and the naive ASP_RGBD baseline) from one config.
+DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
+                        int target_count) {
+  DalicParams params;
+  params.metric = metric;
+  params.weight_spatial = config.weight_spatial;
+  params.weight_color = config.weight_color;
+  params.weight_normal = config.weight_normal;
+  params.window_multiple = config.window_multiple;
+  params.radius_m = radius_m;
+  params.min_size_fraction = config.min_size_fraction;
+  params.target_count = target_count;
+  params.threads = config.threads;
+  return params;
+}
+
 }  // namespace
 
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
@@ -68,16 +84,9 @@ Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
                            ? radiusForCount(features, config.superpixel_count)
                            : config.radius_m;
   const cv::Mat density = computeDepthDensity(features, radius);
-  DalicParams params;
-  params.metric = MetricKind::kDepthAdaptive;
-  params.weight_spatial = config.weight_spatial;
-  params.weight_color = config.weight_color;
-  params.weight_normal = config.weight_normal;
-  params.window_multiple = config.window_multiple;
-  params.radius_m = radius;
-  params.min_size_fraction = config.min_size_fraction;
-  params.target_count = config.size_mode == SizeMode::kCount ? config.superpixel_count : 0;
-  params.threads = config.threads;
+  const DalicParams params =
+      dalicParams(config, MetricKind::kDepthAdaptive, radius,
+                  config.size_mode == SizeMode::kCount ? config.superpixel_count : 0);
   return cluster(features, density, params,
                  {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
                   config.min_size_fraction});
@@ -140,16 +149,8 @@ Superpixels computeAspRgbd(const RgbdFrame& frame, const DaspConfig& config) {
   const PixelFeatures features = computeFeatures(frame, count_config);  // validates
   const float radius = radiusForCount(features, config.superpixel_count);
   const cv::Mat density = computeConstantDensity(features, config.superpixel_count);
-  DalicParams params;
-  params.metric = MetricKind::kColorDepth2D;
-  params.weight_spatial = config.weight_spatial;
-  params.weight_color = config.weight_color;
-  params.weight_normal = config.weight_normal;
-  params.window_multiple = config.window_multiple;
-  params.radius_m = radius;
-  params.min_size_fraction = config.min_size_fraction;
-  params.target_count = config.superpixel_count;
-  params.threads = config.threads;
+  const DalicParams params =
+      dalicParams(config, MetricKind::kColorDepth2D, radius, config.superpixel_count);
   return cluster(features, density, params,
                  {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
                   config.min_size_fraction});
