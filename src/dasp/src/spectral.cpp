@@ -215,7 +215,8 @@ std::vector<float> globalizeEdgeWeights(const WeightedGraph& graph, const Spectr
       largest = std::max(largest, static_cast<float>(sum));
     }
   }
-  // Edges without connection (weight 0, or between components) are boundaries at every level.
+  // Edges without connection (weight 0, or between components) get the largest weight of the
+  // graph: the strongest boundary (they merge only above every other edge).
   const float unconnected = largest > 0.0f ? largest : 1.0f;
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     const GraphEdge& e = graph.edges[k];

@@ -26,8 +26,10 @@ float distance(const Superpixel& a, const Superpixel& b, const SuperpixelGraphCo
     const float length = delta.norm();
     d += config.weight_position * std::max(0.0f, length - 2.0f * radius) / (2.0f * radius);
     if (length > 0.0f) {
-      // eq. 4.21: normals towards the camera; (n_a - n_b) . (v_a - v_b) > 0 for a concave edge.
-      d += config.weight_normal * std::max(0.0f, (a.normal - b.normal).dot(delta) / length);
+      // eq. 4.21, concave edges only. Our normals point towards the camera (out of the surface);
+      // with them (n_a - n_b) . (v_a - v_b) > 0 on a convex edge (a sphere: n = (v - c) / r), so
+      // the sign is turned to keep the thesis' intent: cost for concave, none for convex.
+      d += config.weight_normal * std::max(0.0f, (b.normal - a.normal).dot(delta) / length);
     }
   }
   return d;

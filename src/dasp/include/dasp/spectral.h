@@ -54,8 +54,10 @@ Eigenpairs smallestEigenpairsDense(const WeightedGraph& graph, int count);
 /// s-DASP globalisation (4.3.2, eq. 4.22): returns one globalised boundary weight per edge of
 /// `graph`, same order (larger = stronger boundary), sum over the k non-trivial eigenpairs of
 /// 1/sqrt(lambda_t) |x_ti - x_tj|, computed per connected component. Handles disconnected
-/// graphs, tiny graphs and k >= n. Edge weights must be >= 0 (edges of weight 0 carry no
-/// connection). Throws std::invalid_argument for edges out of range or negative weights.
+/// graphs, tiny graphs and k >= n. Edge weights must be >= 0; edges of weight 0 carry no
+/// connection and, like edges between components, get the largest weight of the graph (the
+/// strongest boundary). Throws std::invalid_argument for edges out of range, loops or negative
+/// weights.
 std::vector<float> globalizeEdgeWeights(const WeightedGraph& graph,
                                         const SpectralConfig& config = {});
 
