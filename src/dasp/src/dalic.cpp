@@ -220,7 +220,8 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
   const float* density = density_.ptr<float>();
   clusters_.clear();
   clusters_.reserve(seeds.size());
-  for (const Seed& seed : seeds) {
+  for (std::size_t seed_index = 0; seed_index < seeds.size(); ++seed_index) {
+    const Seed& seed = seeds[seed_index];
     const int cx = std::clamp(static_cast<int>(std::lround(seed.u)), 0, f.width - 1);
     const int cy = std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1);
     const float seed_density = density[static_cast<std::size_t>(cy) * f.width + cx];
@@ -253,6 +254,7 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
                                         : Eigen::Vector3f(-Eigen::Vector3f::UnitZ());
     c.radius_px = Impl::radiusPx(*this, c.position.z(), seed_density);
     c.mass = 1.0f;
+    c.origin = static_cast<int>(seed_index);
     clusters_.push_back(c);
   }
 }
@@ -438,6 +440,7 @@ void Dalic::update() {
         heap.pop();
         Cluster& parent = next[static_cast<std::size_t>(index)];
         Cluster child = parent;
+        child.origin = -1;  // a new superpixel: only the parent continues the seed
         // Centroids of the two halves of a disc lie 0.85 standard deviations from its centre.
         const float su = 0.85f * parent.spread_u, sv = 0.85f * parent.spread_v;
         parent.u -= su;

@@ -121,6 +121,9 @@ struct Cluster {
   int pixel_count = 0;
   float mass = 0.0f;  ///< Sum of the density over the cluster's pixels (ideally 1).
   float spread_u = 0.0f, spread_v = 0.0f;  ///< Principal 2D axis times its std dev, pixels.
+  /// Index of the seed (in the vector given to Dalic::initialize) this cluster grew from; -1 for
+  /// clusters created later by count-control splits. Streaming DASP links superpixels through it.
+  int origin = -1;
 };
 
 /// Density-Adaptive Local Iterative Clustering (alg. 3). Holds its working buffers so that the
