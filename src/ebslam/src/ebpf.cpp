@@ -26,6 +26,12 @@ void EventFilterConfig::validate() const {
       (!(adapt_g0_divisor > 0.0) || !(adapt_g0_min > 0.0) || !(adapt_g0_max >= adapt_g0_min))) {
     fail("adaptive G0 needs divisor > 0 and 0 < min <= max");
   }
+  if (!(latency_compensation_s >= 0.0) || !std::isfinite(latency_compensation_s)) {
+    fail("latency_compensation_s must be >= 0 and finite");
+  }
+  if (!(velocity_window_s > 0.0) || !std::isfinite(velocity_window_s)) {
+    fail("velocity_window_s must be positive and finite");
+  }
   if (!(initial_spread_m >= 0.0) || !(initial_spread_rad >= 0.0) ||
       !std::isfinite(initial_spread_m) || !std::isfinite(initial_spread_rad)) {
     fail("initial spreads must be >= 0 and finite");
@@ -119,11 +125,31 @@ double G0Tracker::update(std::uint64_t events, const Pose2& estimate) {
   return std::clamp(smoothed_ / divisor_, min_, max_);
 }
 
+void VelocityEstimator::add(double t_s, const Pose2& estimate) {
+  if (!history_.empty() && (t_s < history_.back().t_s || t_s - history_.back().t_s > window_s_)) {
+    history_.clear();
+    velocity_ = {};
+  }
+  Pose2 pose = estimate;
+  if (!history_.empty()) {
+    pose.theta = history_.back().pose.theta +
+                 std::remainder(estimate.theta - history_.back().pose.theta, 2.0 * M_PI);
+  }
+  history_.push_back({t_s, pose});
+  while (history_.size() > 2 && t_s - history_[1].t_s >= window_s_) history_.pop_front();
+  const Sample& oldest = history_.front();
+  const double span = t_s - oldest.t_s;
+  if (span < 0.5 * window_s_) return;
+  velocity_ = {(pose.x - oldest.pose.x) / span, (pose.y - oldest.pose.y) / span,
+               (pose.theta - oldest.pose.theta) / span};
+}
+
 EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const CeilingCamera& camera,
                                          GridMap2f likelihood, const Pose2& start)
     : config_(config),
       camera_(camera),
       likelihood_(std::move(likelihood)),
+      velocity_(config.filter.velocity_window_s),
       last_t_us_(std::numeric_limits<std::int64_t>::min()) {
   config_.validate();
   if (likelihood_.data.empty()) {
@@ -177,6 +203,9 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
     if (since_resample_ >= f.resample_every) {
       particles_.resampleSystematic(f.reset_scores_on_resample);
       since_resample_ -= f.resample_every;
+      if (f.latency_compensation_s > 0.0) {
+        velocity_.add(1e-6 * static_cast<double>(events[i - 1].t_us), rawEstimate());
+      }
       if (f.adapt_g0) {
         const double g0 = g0_tracker_.update(f.resample_every, estimate());
         if (g0 > 0.0) setG0(g0);
@@ -186,6 +215,18 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
 }
 
 Pose2 EventParticleFilter::estimate() const {
+  Pose2 p = rawEstimate();
+  const double tau = config_.filter.latency_compensation_s;
+  if (tau > 0.0) {
+    const Pose2& v = velocity_.velocity();
+    p.x += v.x * tau;
+    p.y += v.y * tau;
+    p.theta = std::remainder(p.theta + v.theta * tau, 2.0 * M_PI);
+  }
+  return p;
+}
+
+Pose2 EventParticleFilter::rawEstimate() const {
   return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best()
                                                                     : particles_.weightedMean();
 }

@@ -305,7 +305,8 @@ CeilingMap renderCeilingMap(const Scene& scene, const FloorRegion& region,
 
   CeilingMap map;
   map.metres_per_pixel = config.metres_per_pixel;
-  map.origin_m = region.min;
+  // Pixel (col, row) covers region.min + [col, col + 1) * res: its centre is the origin below.
+  map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * config.metres_per_pixel);
   const int cols =
       static_cast<int>(std::ceil((region.max.x() - region.min.x()) / config.metres_per_pixel));
   const int rows =

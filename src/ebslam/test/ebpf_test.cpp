@@ -138,5 +138,24 @@ TEST(Ebpf, BadInputIsRejectedWithoutSideEffects) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+TEST(VelocityEstimator, RecoversAConstantVelocityAcrossTheHeadingWrap) {
+  VelocityEstimator v(0.1);
+  EXPECT_DOUBLE_EQ(v.velocity().x, 0.0);
+  for (int k = 0; k <= 40; ++k) {
+    const double t = 0.005 * k;
+    // 0.3 m/s along x, -0.2 m/s along y, 2 rad/s through +-pi.
+    v.add(t, Pose2{1.0 + 0.3 * t, -0.2 * t, std::remainder(3.0 + 2.0 * t, 2.0 * M_PI)});
+  }
+  EXPECT_NEAR(v.velocity().x, 0.3, 1e-9);
+  EXPECT_NEAR(v.velocity().y, -0.2, 1e-9);
+  EXPECT_NEAR(v.velocity().theta, 2.0, 1e-9);
+  // A gap longer than the window restarts the estimate.
+  v.add(1.0, Pose2{});
+  EXPECT_DOUBLE_EQ(v.velocity().x, 0.0);
+  EbpfConfig bad;
+  bad.filter.latency_compensation_s = -0.01;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace ebslam

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ebslam/camera_model.h"
+#include "ebslam/ebpf.h"
 #include "ebslam/simulator.h"
 #include "ebslam/simulator_scenes.h"
 #include "ebslam/trajectory.h"
@@ -479,7 +480,9 @@ TEST(CeilingMap, EdgesLieWhereTheTextureChanges) {
   const CeilingMap map = renderCeilingMap(scene, region, config);
   ASSERT_EQ(map.edges.cols, 150);
   ASSERT_EQ(map.edges.rows, 150);
-  EXPECT_DOUBLE_EQ(map.origin_m.x(), 0.0);
+  // origin_m is the centre of pixel (0, 0), which covers [0, 2) cm.
+  EXPECT_DOUBLE_EQ(map.origin_m.x(), 0.01);
+  EXPECT_DOUBLE_EQ(map.origin_m.y(), 0.01);
   // Band edges at x = 1.0 m and 1.2 m: map columns 50 and 60 (+-1).
   const int row = 75;
   for (int col = 0; col < map.edges.cols; ++col) {
@@ -491,6 +494,38 @@ TEST(CeilingMap, EdgesLieWhereTheTextureChanges) {
   EXPECT_GT(cv::countNonZero(map.edges.colRange(49, 52)), 100);
   EXPECT_GT(cv::countNonZero(map.edges.colRange(59, 62)), 100);
   EXPECT_THROW(renderCeilingMap(Scene{}, region, config), std::invalid_argument);
+}
+
+TEST(CeilingMap, LikelihoodMapFromItPutsEdgesWhereTheyAreInTheWorld) {
+  // The sensor model built from renderCeilingMap's edges and origin must look up an edge pixel
+  // at every world point the pixel covers: [region.min + col * res, region.min + (col + 1) res).
+  cv::Mat texture(300, 300, CV_32FC1, cv::Scalar(0.9));
+  texture.colRange(100, 120).setTo(0.1);
+  FloorRegion region;
+  region.min = Eigen::Vector2d(-1.0, -0.5);
+  region.max = Eigen::Vector2d(2.0, 2.5);
+  const Scene scene = makeCeilingScene(texture, region, 0.01);
+  CeilingMapConfig config;
+  config.metres_per_pixel = 0.02;
+  const CeilingMap map = renderCeilingMap(scene, region, config);
+  const GridMap2f likelihood =
+      makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m, 0.015);
+  const int row = 75;
+  int checked = 0;
+  for (int col = 1; col + 1 < map.edges.cols; ++col) {
+    if (map.edges.at<std::uint8_t>(row, col) == 0 || map.edges.at<std::uint8_t>(row, col - 1) ||
+        map.edges.at<std::uint8_t>(row, col + 1)) {
+      continue;  // an isolated edge pixel along the row: its neighbours score below 1
+    }
+    const double y = region.min.y() + (row + 0.5) * config.metres_per_pixel;
+    for (const double f : {0.1, 0.5, 0.9}) {
+      const double x = region.min.x() + (col + f) * config.metres_per_pixel;
+      EXPECT_FLOAT_EQ(likelihood.lookup(x, y), 1.0f) << "col " << col << " fraction " << f;
+    }
+    EXPECT_LT(likelihood.lookup(region.min.x() + (col + 1.1) * config.metres_per_pixel, y), 1.0f);
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
 }
 
 }  // namespace

@@ -60,6 +60,11 @@ inline void addFilterOptions(CLI::App& app, EventFilterConfig& f) {
   app.add_flag("--adapt-g0", f.adapt_g0, "estimate G0 online from events per pixel of motion");
   app.add_option("--adapt-g0-divisor", f.adapt_g0_divisor, "adaptive G0 = events/pixel / this")
       ->capture_default_str();
+  app.add_option("--latency", f.latency_compensation_s,
+                 "report the pose extrapolated by this event latency [s]")
+      ->capture_default_str();
+  app.add_option("--velocity-window", f.velocity_window_s, "velocity estimate baseline [s]")
+      ->capture_default_str();
   app.add_option("--seed", f.seed, "random seed")->capture_default_str();
 }
 

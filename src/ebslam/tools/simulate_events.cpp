@@ -140,8 +140,8 @@ int run(const Options& options, ebslam::SimulatorConfig config,
     }
     std::ofstream meta(options.map_prefix + ".yaml");
     meta.precision(12);
-    meta << "# Ceiling map for EB-PF: pixel (col, row) covers world x in [origin_x + col * res,\n"
-         << "# origin_x + (col + 1) * res), y likewise with row (row grows with world y).\n"
+    meta << "# Ceiling map for EB-PF: pixel (col, row) has its centre at world\n"
+         << "# (origin_x + col * res, origin_y + row * res) (row grows with world y).\n"
          << "edges: " << options.map_prefix + "_edges.png\n"
          << "intensity: " << options.map_prefix + "_intensity.png\n"
          << "resolution_m: " << map.metres_per_pixel << "\n"

@@ -37,9 +37,13 @@ enum class OccurrenceSplat {
 
 struct Ebslam2dConfig {
   /// Localisation (thesis table 7.1 uses N = 5..75; 10 is the smallest with a good RMSE).
+  /// G0 = 30 rather than EB-PF's 60: against the map being built, which starts empty and lags
+  /// the true edges, the particles need the wider diffusion to stay on the motion (30, 60 and
+  /// 100 compared over all simulated freiburg2_pioneer_* runs, docs/results/events2d.md).
   EventFilterConfig filter = [] {
     EventFilterConfig f;
     f.num_particles = 10;
+    f.g0 = 30.0;
     return f;
   }();
   /// Map cell edge length in units of W_trig (7.2.4: "in the order of W_trig").

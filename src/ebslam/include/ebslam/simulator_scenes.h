@@ -9,10 +9,11 @@
 // forward, camera z = up: exactly the transform T_p of eq. 6.33, so a ceiling point seen at
 // pixel e lies at (x, y) + R_z(theta) (D / f) (e - c) (eq. 6.32-6.35, no distortion).
 //
-// Ceiling map convention (for EB-PF / EB-SLAM-2D, as GridMap2f): map pixel (col, row) covers
-// world x in [origin_m.x() + col * metres_per_pixel, origin_m.x() + (col + 1) * metres_per_pixel)
-// and y likewise with row, row growing with world y. Seen from below with heading 0 the sensor
-// image has the same orientation as the map (u along world x, v along world y).
+// Ceiling map convention (for EB-PF / EB-SLAM-2D): map pixel (col, row) has its centre at world
+// (origin_m.x() + col * metres_per_pixel, origin_m.y() + row * metres_per_pixel), row growing
+// with world y; that is the origin_centre_m of makeEdgeLikelihoodMap (ebpf.h). Seen from below with
+// heading 0 the sensor image has the same orientation as the map (u along world x, v along world
+// y).
 
 #include <cstdint>
 #include <string>
@@ -106,7 +107,7 @@ struct CeilingMap {
   cv::Mat intensity;  ///< CV_32FC1 in [0, 1], blurred like the sensor sees it
   cv::Mat edges;      ///< CV_8UC1, 255 on edges, 0 elsewhere
   double metres_per_pixel = 0.0;
-  Eigen::Vector2d origin_m{0.0, 0.0};  ///< world (x, y) of the outer corner of map pixel (0, 0)
+  Eigen::Vector2d origin_m{0.0, 0.0};  ///< world (x, y) of the centre of map pixel (0, 0)
 };
 
 struct CeilingMapConfig {
