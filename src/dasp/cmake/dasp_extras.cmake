@@ -10,7 +10,8 @@ if(DASP_BUILD_TOOLS)
   find_package(MPI COMPONENTS C QUIET)
   find_package(PCL 1.10 REQUIRED COMPONENTS common octree kdtree search segmentation)
   add_library(dasp_peers STATIC ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/peers.cpp
-    ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/methods.cpp)
+    ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/methods.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/tools/peers/lccp.cpp)
   target_include_directories(dasp_peers PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/tools)
   target_include_directories(dasp_peers SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
   target_link_libraries(dasp_peers PUBLIC dasp::dasp opencv_ximgproc

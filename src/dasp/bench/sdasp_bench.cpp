@@ -1,0 +1,201 @@
+// Benchmarks of s-DASP (thesis ch. 4) at 640x480 with K = 1000 DASP superpixels, single-threaded:
+// superpixel graph, eigen solve (globalisation), labelling at one threshold, the pixel UCM, and
+// DASP + s-DASP together against OpenCV ximgproc SLIC on the same frame in the same run; prints the
+// ratio (CPU time, robust on a shared machine) and the thesis' 250 ms per frame for comparison.
+//
+// Frame: learn0 of ../shared/data/osd/learn (or $DASP_BENCH_FRAME_DIR/<name>), else a synthetic
+// textured two-plane scene of the same size.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc.hpp>
+
+#include "dasp/dasp.h"
+#include "dasp/segmentation.h"
+#include "dasp/spectral.h"
+#include "dasp/superpixel_graph.h"
+
+namespace {
+
+using namespace dasp;
+
+constexpr int kCount = 1000;
+constexpr int kSlicRegionSize = 18;  // 640x480 / 18^2 = 948 grid cells; SLIC returns about 970
+
+RgbdFrame loadFrame() {
+  namespace fs = std::filesystem;
+  fs::path folder = fs::path(__FILE__).parent_path() / "../../../../shared/data/osd/learn";
+  if (const char* env = std::getenv("DASP_BENCH_FRAME_DIR")) folder = env;
+  RgbdFrame frame;
+  frame.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f};
+  if (fs::exists(folder / "learn0_rgb.png")) {
+    frame.color = cv::imread((folder / "learn0_rgb.png").string(), cv::IMREAD_COLOR);
+    frame.depth = cv::imread((folder / "learn0_depth_mm.png").string(), cv::IMREAD_UNCHANGED);
+    std::printf("frame: %s/learn0\n", folder.string().c_str());
+    return frame;
+  }
+  std::printf("frame: synthetic (no data at %s)\n", folder.string().c_str());
+  frame.color = cv::Mat(480, 640, CV_8UC3);
+  cv::randu(frame.color, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::GaussianBlur(frame.color, frame.color, cv::Size(0, 0), 4.0);
+  frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(2000));
+  frame.depth(cv::Rect(160, 120, 320, 240)).setTo(1200);
+  return frame;
+}
+
+const RgbdFrame& frame() {
+  static const RgbdFrame f = loadFrame();
+  return f;
+}
+
+DaspConfig daspConfig() {
+  DaspConfig c;
+  c.superpixel_count = kCount;
+  c.threads = 1;
+  return c;
+}
+
+const Superpixels& superpixels() {
+  static const Superpixels s = computeDasp(frame(), daspConfig());
+  return s;
+}
+
+const WeightedGraph& similarityGraph() {
+  static const WeightedGraph g = buildSuperpixelGraph(superpixels());
+  return g;
+}
+
+const WeightedGraph& contourGraph() {
+  static const WeightedGraph g = ultrametricContourGraph(superpixels());
+  return g;
+}
+
+void BM_SdaspGraph(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(buildSuperpixelGraph(superpixels()));
+  state.counters["nodes"] = similarityGraph().node_count;
+  state.counters["edges"] = static_cast<double>(similarityGraph().edges.size());
+}
+BENCHMARK(BM_SdaspGraph)->Unit(benchmark::kMillisecond);
+
+void BM_SdaspEigenSolve(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(globalizeEdgeWeights(similarityGraph()));
+  state.counters["k"] = SpectralConfig{}.eigenvector_count;
+}
+BENCHMARK(BM_SdaspEigenSolve)->Unit(benchmark::kMillisecond);
+
+// Union-find labelling of the graph and the pixel segment image at the default threshold.
+void BM_SdaspLabelling(benchmark::State& state) {
+  const float threshold = SdaspConfig{}.threshold;
+  std::size_t segments = 0;
+  for (auto _ : state) {
+    const std::vector<int> nodes = segmentGraph(contourGraph(), threshold);
+    benchmark::DoNotOptimize(segmentPixels(superpixels().labels, nodes));
+    segments = static_cast<std::size_t>(*std::max_element(nodes.begin(), nodes.end()) + 1);
+  }
+  state.counters["segments"] = static_cast<double>(segments);
+}
+BENCHMARK(BM_SdaspLabelling)->Unit(benchmark::kMillisecond);
+
+// The whole threshold sweep at 101 levels (node labels only).
+void BM_SdaspSweep101(benchmark::State& state) {
+  std::vector<float> thresholds(101);
+  for (int i = 0; i <= 100; ++i) thresholds[i] = 0.01f * i;
+  for (auto _ : state) benchmark::DoNotOptimize(segmentGraphSweep(contourGraph(), thresholds));
+}
+BENCHMARK(BM_SdaspSweep101)->Unit(benchmark::kMillisecond);
+
+void BM_SdaspUcmImage(benchmark::State& state) {
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ultrametricContourMap(superpixels().labels, contourGraph()));
+  }
+}
+BENCHMARK(BM_SdaspUcmImage)->Unit(benchmark::kMillisecond);
+
+// s-DASP after the superpixels: graph, eigen solve, labelling.
+void BM_Sdasp(benchmark::State& state) {
+  const SdaspConfig config;
+  for (auto _ : state) {
+    const WeightedGraph ucg = ultrametricContourGraph(superpixels(), config);
+    benchmark::DoNotOptimize(
+        segmentPixels(superpixels().labels, segmentGraph(ucg, config.threshold)));
+  }
+}
+BENCHMARK(BM_Sdasp)->Unit(benchmark::kMillisecond);
+
+// DASP + s-DASP from the RGB-D frame to the segment image.
+void BM_DaspPlusSdasp(benchmark::State& state) {
+  const SdaspConfig config;
+  for (auto _ : state) {
+    const Superpixels s = computeDasp(frame(), daspConfig());
+    const WeightedGraph ucg = ultrametricContourGraph(s, config);
+    benchmark::DoNotOptimize(segmentPixels(s.labels, segmentGraph(ucg, config.threshold)));
+  }
+}
+BENCHMARK(BM_DaspPlusSdasp)->Unit(benchmark::kMillisecond);
+
+void BM_OpenCvSlic(benchmark::State& state) {
+  const int previous = cv::getNumThreads();
+  cv::setNumThreads(1);
+  int count = 0;
+  for (auto _ : state) {
+    cv::Mat lab;
+    cv::cvtColor(frame().color, lab, cv::COLOR_BGR2Lab);
+    auto slic = cv::ximgproc::createSuperpixelSLIC(lab, cv::ximgproc::SLIC, kSlicRegionSize);
+    slic->iterate(10);
+    cv::Mat labels;
+    slic->getLabels(labels);
+    count = slic->getNumberOfSuperpixels();
+  }
+  cv::setNumThreads(previous);
+  state.counters["superpixels"] = count;
+}
+BENCHMARK(BM_OpenCvSlic)->Unit(benchmark::kMillisecond);
+
+// Records the mean CPU time per run name, to print the ratios at the end.
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& run : runs) {
+      if (run.run_type == Run::RT_Iteration && run.iterations > 0) {
+        cpu_ms[run.benchmark_name()] = run.GetAdjustedCPUTime();
+      }
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> cpu_ms;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  std::printf("K = %d: %zu DASP superpixels, %zu graph edges\n", kCount,
+              superpixels().superpixels.size(), similarityGraph().edges.size());
+  RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  const auto find = [&](const std::string& name) {
+    const auto it = reporter.cpu_ms.find(name);
+    return it == reporter.cpu_ms.end() ? -1.0 : it->second;
+  };
+  const double total = find("BM_DaspPlusSdasp"), slic = find("BM_OpenCvSlic");
+  const double sdasp = find("BM_Sdasp");
+  if (total > 0 && slic > 0) {
+    std::printf(
+        "ratio DASP + s-DASP / OpenCV SLIC, single-threaded CPU time: %.3f (%.2f ms / %.2f ms)\n",
+        total / slic, total, slic);
+  }
+  if (total > 0) {
+    std::printf(
+        "DASP + s-DASP: %.2f ms a frame (s-DASP alone %.2f ms) = %.3f x the thesis' 250 ms\n",
+        total, sdasp, total / 250.0);
+  }
+  benchmark::Shutdown();
+  return 0;
+}
