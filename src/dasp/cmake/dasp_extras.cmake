@@ -23,10 +23,15 @@ endif()
 
 # dasp-core: the DALIC assignment and feature loops are written to vectorise, but GCC's -O2
 # "very cheap" cost model refuses loops of unknown trip count; allow its dynamic model there.
+# std::sqrt setting errno and divisions that might raise FP exceptions also keep loops scalar:
+# the library reads neither errno nor FP exception flags, and neither flag changes any result.
+if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+  target_compile_options(dasp PRIVATE -fno-math-errno -fno-trapping-math)
+endif()
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   set_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp
-    PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic")
+    PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic;-fassociative-math;-fno-signed-zeros")
 endif()
 # Benchmarks compare against OpenCV ximgproc SLIC in the same run.
 if(DASP_BUILD_BENCHMARKS)

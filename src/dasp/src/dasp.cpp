@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -20,15 +22,15 @@ struct RunParams {
 };
 
 // SPDS/grid/random seeds, DALIC iterations, connectivity and the superpoint fit.
-Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
-                    const DalicParams& dalic_params, const RunParams& run) {
+// `dalic` refers to `features` and `density` and has been reset to the run's parameters.
+Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& density,
+                    float radius_m, const RunParams& run) {
   std::vector<Seed> seeds = sampleSeeds(density, run.seeding, run.seed);
   if (seeds.empty()) {  // density too low for even one point: one superpixel at its maximum
     cv::Point max_location;
     cv::minMaxLoc(density, nullptr, nullptr, nullptr, &max_location);
     seeds.push_back({static_cast<float>(max_location.x), static_cast<float>(max_location.y)});
   }
-  Dalic dalic(features, density, dalic_params);
   dalic.initialize(seeds);
   for (int it = 0; it < run.iterations; ++it) {
     dalic.assign();
@@ -56,8 +58,14 @@ Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
       }
     }
   }
-  result.superpixels = fitSuperpoints(result.labels, features, density, dalic_params.radius_m);
+  result.superpixels = fitSuperpoints(result.labels, features, density, radius_m);
   return result;
+}
+
+Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
+                    const DalicParams& dalic_params, const RunParams& run) {
+  Dalic dalic(features, density, dalic_params);
+  return cluster(dalic, features, density, dalic_params.radius_m, run);
 }
 
 // DALIC parameters of the RGB-D methods (DASP and the naive ASP_RGBD baseline) from one config.
@@ -78,18 +86,39 @@ DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radiu
 
 }  // namespace
 
-Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
-  const PixelFeatures features = computeFeatures(frame, config);  // validates
-  const float radius = config.size_mode == SizeMode::kCount
-                           ? radiusForCount(features, config.superpixel_count)
-                           : config.radius_m;
-  const cv::Mat density = computeDepthDensity(features, radius);
+struct DaspSegmenter::Buffers {
+  PixelFeatures features;
+  cv::Mat density;
+  std::optional<Dalic> dalic;  // refers to features and density
+};
+
+DaspSegmenter::DaspSegmenter(const DaspConfig& config)
+    : config_(config), buffers_(std::make_unique<Buffers>()) {}
+
+DaspSegmenter::~DaspSegmenter() = default;
+
+Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
+  Buffers& b = *buffers_;
+  computeFeatures(frame, config_, b.features);  // validates
+  const float radius = config_.size_mode == SizeMode::kCount
+                           ? radiusForCount(b.features, config_.superpixel_count)
+                           : config_.radius_m;
+  computeDepthDensity(b.features, radius, b.density);
   const DalicParams params =
-      dalicParams(config, MetricKind::kDepthAdaptive, radius,
-                  config.size_mode == SizeMode::kCount ? config.superpixel_count : 0);
-  return cluster(features, density, params,
-                 {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
-                  config.min_size_fraction});
+      dalicParams(config_, MetricKind::kDepthAdaptive, radius,
+                  config_.size_mode == SizeMode::kCount ? config_.superpixel_count : 0);
+  if (b.dalic) {
+    b.dalic->reset(params);
+  } else {
+    b.dalic.emplace(b.features, b.density, params);
+  }
+  return cluster(*b.dalic, b.features, b.density, radius,
+                 {config_.seeding, config_.seed, config_.iterations, config_.enforce_connectivity,
+                  config_.min_size_fraction});
+}
+
+Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
+  return DaspSegmenter(config).compute(frame);
 }
 
 Superpixels computeAspRgb(const cv::Mat& color, const AspConfig& config) {

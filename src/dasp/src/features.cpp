@@ -86,53 +86,146 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config) {
   if (config.threads < 0) throw std::invalid_argument("DASP: threads must be >= 0");
 }
 
+namespace {
+
+// Sizes the feature arrays for an image; keeps their storage (and contents) when the size is
+// unchanged, so that a stream of frames allocates and clears nothing.
+void resizeFeatures(PixelFeatures& features, int width, int height, bool depth) {
+  features.width = width;
+  features.height = height;
+  const std::size_t n = features.size();
+  for (std::vector<float>* v : {&features.r, &features.g, &features.b}) v->resize(n);
+  features.valid.resize(n);
+  for (std::vector<float>* v : {&features.x, &features.y, &features.z, &features.nx, &features.ny,
+                                &features.nz, &features.area}) {
+    if (depth) {
+      v->resize(n);
+    } else {
+      v->clear();
+    }
+  }
+}
+
+void colorRow(const cv::Vec3b* src, int width, float* r, float* g, float* b) {
+  for (int col = 0; col < width; ++col) {
+    b[col] = src[col][0] * (1.0f / 255.0f);
+    g[col] = src[col][1] * (1.0f / 255.0f);
+    r[col] = src[col][2] * (1.0f / 255.0f);
+  }
+}
+
+// Robust depth derivative along one axis from the depths at -h, -1, 0, +1, +h (eq. 3.6, 3.7):
+// the central difference at step h if both neighbours lie on the same surface (|dz| <= jump z),
+// else the one-sided difference on the side that does, then the same at step 1, else 0.
+// Branch-free so that the row loops below vectorise.
+inline float robustDerivative(float zmh, float zm1, float zc, float zp1, float zph, float h,
+                              float jump) {
+  const float tolerance = jump * zc;
+  const bool ok_mh = (zmh > 0.0f) & (std::abs(zmh - zc) <= tolerance);
+  const bool ok_ph = (zph > 0.0f) & (std::abs(zph - zc) <= tolerance);
+  const bool ok_m1 = (zm1 > 0.0f) & (std::abs(zm1 - zc) <= tolerance);
+  const bool ok_p1 = (zp1 > 0.0f) & (std::abs(zp1 - zc) <= tolerance);
+  const float inv_h = 1.0f / h;
+  // All candidates are computed unconditionally and then selected, without branches.
+  const float backward_1 = zc - zm1, forward_1 = zp1 - zc, central_1 = 0.5f * (zp1 - zm1);
+  const float backward_h = (zc - zmh) * inv_h, forward_h = (zph - zc) * inv_h;
+  const float central_h = 0.5f * (zph - zmh) * inv_h;
+  float d = ok_m1 ? backward_1 : 0.0f;
+  d = ok_p1 ? forward_1 : d;
+  d = ok_m1 & ok_p1 ? central_1 : d;
+  d = ok_mh ? backward_h : d;
+  d = ok_ph ? forward_h : d;
+  d = ok_mh & ok_ph ? central_h : d;
+  return d;
+}
+
+struct NormalParams {
+  float inv_fx, inv_fy, cx, max_slant;
+};
+
+// Normal (towards the camera, eq. 3.8, 3.9) and 3D area of one pixel from its depth derivatives:
+// normal = tangent_u x tangent_v of the back-projected surface P = z(u, v) ray(u, v), with
+// tangent_u = dz_du ray + (z / fx, 0, 0) and tangent_v = dz_dv ray + (0, z / fy, 0), expanded
+// by hand; its length is the pixel's 3D area.
+inline void normalAndArea(float zc, float dz_du, float dz_dv, float ray_x, float ray_y,
+                          const NormalParams& p, float& nx_out, float& ny_out, float& nz_out,
+                          float& area_out) {
+  const float nx = -dz_du * zc * p.inv_fy;
+  const float ny = -dz_dv * zc * p.inv_fx;
+  const float nz =
+      zc * (dz_du * ray_x * p.inv_fy + dz_dv * ray_y * p.inv_fx + zc * p.inv_fx * p.inv_fy);
+  const float norm = std::sqrt(nx * nx + ny * ny + nz * nz);
+  // Invalid pixels (zc = 0) have n = 0 and area 0 without a select; the division is
+  // unconditional, so that the loop vectorises.
+  const float magnitude = 1.0f / std::max(norm, 1e-30f);
+  const float scale = nx * ray_x + ny * ray_y + nz > 0.0f ? -magnitude : magnitude;
+  const float frontal_area = zc * zc * p.inv_fx * p.inv_fy;
+  nx_out = nx * scale;
+  ny_out = ny * scale;
+  nz_out = nz * scale;
+  area_out = std::min(norm, p.max_slant * frontal_area);
+}
+
+// Interior of one row (columns [begin, end) have all neighbours in the image): vectorised.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void normalRowInterior(const float* __restrict z, std::ptrdiff_t stride, int step, float jump,
+                       float ray_y, const NormalParams p, int begin, int end,
+                       float* __restrict nx, float* __restrict ny, float* __restrict nz,
+                       float* __restrict area) {
+  const float h = static_cast<float>(step);
+  for (int col = begin; col < end; ++col) {
+    const float zc = z[col];
+    const float dz_du =
+        robustDerivative(z[col - step], z[col - 1], zc, z[col + 1], z[col + step], h, jump);
+    const float dz_dv = robustDerivative(z[col - step * stride], z[col - stride], zc,
+                                         z[col + stride], z[col + step * stride], h, jump);
+    const float ray_x = (static_cast<float>(col) - p.cx) * p.inv_fx;
+    normalAndArea(zc, dz_du, dz_dv, ray_x, ray_y, p, nx[col], ny[col], nz[col], area[col]);
+  }
+}
+
+}  // namespace
+
 PixelFeatures computeColorFeatures(const cv::Mat& color) {
   requireColor(color, "ASP");
   PixelFeatures features;
-  features.width = color.cols;
-  features.height = color.rows;
-  const std::size_t n = features.size();
-  features.r.resize(n);
-  features.g.resize(n);
-  features.b.resize(n);
-  features.valid.assign(n, 1);
-  features.valid_count = static_cast<int>(n);
+  resizeFeatures(features, color.cols, color.rows, false);
+  std::fill(features.valid.begin(), features.valid.end(), std::uint8_t{1});
+  features.valid_count = static_cast<int>(features.size());
   for (int row = 0; row < color.rows; ++row) {
-    const cv::Vec3b* src = color.ptr<cv::Vec3b>(row);
     const std::size_t base = static_cast<std::size_t>(row) * color.cols;
-    for (int col = 0; col < color.cols; ++col) {
-      features.b[base + col] = src[col][0] * (1.0f / 255.0f);
-      features.g[base + col] = src[col][1] * (1.0f / 255.0f);
-      features.r[base + col] = src[col][2] * (1.0f / 255.0f);
-    }
+    colorRow(color.ptr<cv::Vec3b>(row), color.cols, features.r.data() + base,
+             features.g.data() + base, features.b.data() + base);
   }
   return features;
 }
 
 PixelFeatures computeFeatures(const RgbdFrame& frame, const DaspConfig& config) {
+  PixelFeatures features;
+  computeFeatures(frame, config, features);
+  return features;
+}
+
+void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeatures& features) {
   validateInput(frame, config);
-  PixelFeatures features = computeColorFeatures(frame.color);
+  const int width = frame.color.cols;
+  const int height = frame.color.rows;
+  resizeFeatures(features, width, height, true);
   features.intrinsics = frame.intrinsics;
-  const int width = features.width;
-  const int height = features.height;
-  const std::size_t n = features.size();
-  features.x.assign(n, 0.0f);
-  features.y.assign(n, 0.0f);
-  features.z.assign(n, 0.0f);
-  features.nx.assign(n, 0.0f);
-  features.ny.assign(n, 0.0f);
-  features.nz.assign(n, 0.0f);
-  features.area.assign(n, 0.0f);
   const Intrinsics k = frame.intrinsics;
   const float inv_fx = 1.0f / k.fx;
   const float inv_fy = 1.0f / k.fy;
 
-  // Pass 1: depth and 3D points (eq. 3.4).
+  // Pass 1: colour, depth and 3D points (eq. 3.4).
   const bool millimetres = frame.depth.type() == CV_16UC1;
   detail::forChunks(height, 16, config.threads, [&](int, int row_begin, int row_end) {
     for (int row = row_begin; row < row_end; ++row) {
       const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
       const std::size_t base = static_cast<std::size_t>(row) * width;
+      colorRow(frame.color.ptr<cv::Vec3b>(row), width, features.r.data() + base,
+               features.g.data() + base, features.b.data() + base);
       float* z = features.z.data() + base;
       if (millimetres) {
         const std::uint16_t* src = frame.depth.ptr<std::uint16_t>(row);
@@ -166,54 +259,48 @@ PixelFeatures computeFeatures(const RgbdFrame& frame, const DaspConfig& config) 
   }
 
   // Pass 2: robust depth derivatives (eq. 3.6, 3.7), normals and pixel surface area. A neighbour
-  // across a depth jump is ignored and the one-sided difference is used (robust at edges).
+  // across a depth jump is ignored and the one-sided difference is used (robust at edges). Near
+  // the image border, neighbours outside the image count as invalid (scalar path).
   const int step = config.normal_step_px;
   const float jump = config.depth_jump_ratio;
-  const float max_slant = config.max_slant_factor;
-  const std::vector<float>& z = features.z;
-  const auto derivative = [&](std::size_t i, int coord, int limit, std::ptrdiff_t stride) {
-    const float zc = z[i];
-    for (int h = step; h >= 1; h = (h == 1 ? 0 : 1)) {
-      const bool has_minus = coord - h >= 0;
-      const bool has_plus = coord + h < limit;
-      const float zm = has_minus ? z[i - h * stride] : 0.0f;
-      const float zp = has_plus ? z[i + h * stride] : 0.0f;
-      const bool ok_minus = zm > 0.0f && std::abs(zm - zc) <= jump * zc;
-      const bool ok_plus = zp > 0.0f && std::abs(zp - zc) <= jump * zc;
-      if (ok_minus && ok_plus) return (zp - zm) / (2.0f * h);
-      if (ok_plus) return (zp - zc) / h;
-      if (ok_minus) return (zc - zm) / h;
-    }
-    return 0.0f;
+  const NormalParams params{inv_fx, inv_fy, k.cx, config.max_slant_factor};
+  const float* z_all = features.z.data();
+  const auto depth_at = [&](int col, int row) {
+    return col >= 0 && col < width && row >= 0 && row < height
+               ? z_all[static_cast<std::size_t>(row) * width + col]
+               : 0.0f;
   };
   detail::forChunks(height, 16, config.threads, [&](int, int row_begin, int row_end) {
     for (int row = row_begin; row < row_end; ++row) {
       const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
+      const std::size_t base = static_cast<std::size_t>(row) * width;
+      float* nx = features.nx.data() + base;
+      float* ny = features.ny.data() + base;
+      float* nz = features.nz.data() + base;
+      float* area = features.area.data() + base;
+      const bool interior_row = row >= step && row + step < height;
+      const int begin = interior_row ? std::min(step, width) : width;
+      const int end = interior_row ? std::max(begin, width - step) : width;
+      if (begin < end) {
+        normalRowInterior(z_all + base, width, step, jump, ray_y, params, begin, end, nx, ny, nz,
+                          area);
+      }
       for (int col = 0; col < width; ++col) {
-        const std::size_t i = static_cast<std::size_t>(row) * width + col;
-        if (!features.valid[i]) continue;
-        const float zc = z[i];
-        const float dz_du = derivative(i, col, width, 1);
-        const float dz_dv = derivative(i, row, height, width);
+        if (col == begin && begin < end) col = end;
+        if (col >= width) break;
+        const float zc = z_all[base + col];
+        const float h = static_cast<float>(step);
+        const float dz_du =
+            robustDerivative(depth_at(col - step, row), depth_at(col - 1, row), zc,
+                             depth_at(col + 1, row), depth_at(col + step, row), h, jump);
+        const float dz_dv =
+            robustDerivative(depth_at(col, row - step), depth_at(col, row - 1), zc,
+                             depth_at(col, row + 1), depth_at(col, row + step), h, jump);
         const float ray_x = (static_cast<float>(col) - k.cx) * inv_fx;
-        // Normal = tangent_u x tangent_v of the back-projected surface P = z(u, v) ray(u, v),
-        // tangent_u = dz_du ray + (z / fx, 0, 0), tangent_v = dz_dv ray + (0, z / fy, 0),
-        // expanded by hand; its length is the pixel's 3D area.
-        float nx = -dz_du * zc * inv_fy;
-        float ny = -dz_dv * zc * inv_fx;
-        float nz = zc * (dz_du * ray_x * inv_fy + dz_dv * ray_y * inv_fx + zc * inv_fx * inv_fy);
-        const float norm = std::sqrt(nx * nx + ny * ny + nz * nz);
-        const float frontal_area = zc * zc * inv_fx * inv_fy;
-        float scale = 1.0f / norm;
-        if (nx * ray_x + ny * ray_y + nz > 0.0f) scale = -scale;  // eq. 3.9: towards the camera
-        features.nx[i] = nx * scale;
-        features.ny[i] = ny * scale;
-        features.nz[i] = nz * scale;
-        features.area[i] = std::min(norm, max_slant * frontal_area);
+        normalAndArea(zc, dz_du, dz_dv, ray_x, ray_y, params, nx[col], ny[col], nz[col], area[col]);
       }
     }
   });
-  return features;
 }
 
 float radiusForCount(const PixelFeatures& features, int count) {
@@ -226,17 +313,22 @@ float radiusForCount(const PixelFeatures& features, int count) {
 }
 
 cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m) {
+  cv::Mat density;
+  computeDepthDensity(features, radius_m, density);
+  return density;
+}
+
+void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density) {
   if (!features.hasDepth()) {
     throw std::invalid_argument("computeDepthDensity: features have no depth");
   }
   if (!finitePositive(radius_m)) {
     throw std::invalid_argument("computeDepthDensity: radius must be finite and positive");
   }
-  cv::Mat density(features.height, features.width, CV_32FC1);
+  density.create(features.height, features.width, CV_32FC1);
   const float scale = 1.0f / (kPi * radius_m * radius_m);
   float* out = density.ptr<float>();
   for (std::size_t i = 0; i < features.size(); ++i) out[i] = features.area[i] * scale;
-  return density;
 }
 
 cv::Mat computeConstantDensity(const PixelFeatures& features, int count) {

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -127,6 +128,27 @@ struct Superpixels {
 /// types that do not match, no valid depth, K out of range, intrinsics that are not finite and
 /// positive, nonsensical parameters).
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config = {});
+
+/// DASP on a stream of frames: the same algorithm and result as computeDasp with this config,
+/// but the per-pixel working buffers (features, density, DALIC labels and distances) are kept
+/// from one frame to the next, so that a stream of same-sized frames allocates and clears no
+/// per-pixel memory except the returned labels. Not thread-safe: one object per thread.
+class DaspSegmenter {
+ public:
+  explicit DaspSegmenter(const DaspConfig& config = {});
+  ~DaspSegmenter();
+  DaspSegmenter(const DaspSegmenter&) = delete;
+  DaspSegmenter& operator=(const DaspSegmenter&) = delete;
+
+  /// Superpixels of one frame; throws std::invalid_argument like computeDasp.
+  Superpixels compute(const RgbdFrame& frame);
+  const DaspConfig& config() const { return config_; }
+
+ private:
+  struct Buffers;
+  DaspConfig config_;
+  std::unique_ptr<Buffers> buffers_;
+};
 
 /// Colour-only Adaptive Superpixels (ASP_RGB): constant density (or config.density) and the
 /// metric of def. 7 over RGB. 3D fields of the result are zero. Every pixel is labelled.

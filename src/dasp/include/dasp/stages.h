@@ -39,6 +39,8 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config);
 /// Stage 1 of alg. 4: colour, 3D points and normals from robust finite differences of depth
 /// (eq. 3.4, 3.6-3.10) and the per-pixel 3D area for the density. Throws if no pixel has depth.
 PixelFeatures computeFeatures(const RgbdFrame& frame, const DaspConfig& config = {});
+/// The same into `features`, reusing its storage: a stream of same-sized frames allocates nothing.
+void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeatures& features);
 
 /// Colour-only features of a CV_8UC3 BGR image; every pixel valid.
 PixelFeatures computeColorFeatures(const cv::Mat& color);
@@ -50,6 +52,8 @@ float radiusForCount(const PixelFeatures& features, int count);
 /// Depth-adaptive density (eq. 3.15): rho(u) = area(u) / (pi R^2) superpixels per pixel,
 /// 0 where depth is invalid. CV_32FC1.
 cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m);
+/// The same into `density`, reusing its storage when the size matches.
+void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density);
 
 /// Constant density over the valid pixels that integrates to `count`. CV_32FC1.
 cv::Mat computeConstantDensity(const PixelFeatures& features, int count);
@@ -135,6 +139,9 @@ class Dalic {
   Dalic(const Dalic&) = delete;
   Dalic& operator=(const Dalic&) = delete;
 
+  /// New parameters for the next run on the (possibly changed) features and density this object
+  /// refers to; keeps the working buffers when the image size is unchanged. Call initialize next.
+  void reset(const DalicParams& params);
   /// Clusters at the seeds, features averaged over a small neighbourhood (alg. 4).
   void initialize(const std::vector<Seed>& seeds);
   /// Assignment half of one iteration: each pixel to the nearest cluster whose window holds it.
