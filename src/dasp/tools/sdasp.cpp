@@ -92,6 +92,13 @@ cv::Mat ucmPicture(const cv::Mat& ucm) {
   return out;
 }
 
+// Pictures are written at `scale` of the frame size (area interpolation; nearest for labels).
+void writePicture(const std::string& path, const cv::Mat& picture, double scale) {
+  cv::Mat out = picture;
+  if (scale != 1.0) cv::resize(picture, out, cv::Size(), scale, scale, cv::INTER_AREA);
+  if (!cv::imwrite(path, out)) throw std::runtime_error("cannot write " + path);
+}
+
 template <typename T>
 std::vector<T> parseList(const std::string& text) {
   std::vector<T> values;
@@ -185,7 +192,7 @@ int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrin
                const std::string& superpixels_kind, int count, std::uint64_t seed, float threshold,
                const dasp::SdaspConfig& config, const std::string& segments_path,
                const std::string& ucm_path, const std::string& labels_path,
-               const std::string& superpixels_path) {
+               const std::string& superpixels_path, double scale) {
   const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, intrinsics);
   double t0 = threadCpuMilliseconds();
   const dasp::Superpixels sp = computeSuperpixels(superpixels_kind, frame, count, seed);
@@ -201,19 +208,14 @@ int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrin
             << " segments at threshold " << threshold << "; " << std::fixed << std::setprecision(1)
             << t_superpixels << " ms superpixels + " << t_ucg << " ms graph and eigen + " << t_label
             << " ms labelling (thread CPU)\n";
-  if (!segments_path.empty() && !cv::imwrite(segments_path, segmentsPicture(segments))) {
-    throw std::runtime_error("cannot write " + segments_path);
-  }
-  if (!ucm_path.empty() &&
-      !cv::imwrite(ucm_path, ucmPicture(dasp::ultrametricContourMap(sp.labels, ucg)))) {
-    throw std::runtime_error("cannot write " + ucm_path);
+  if (!segments_path.empty()) writePicture(segments_path, segmentsPicture(segments), scale);
+  if (!ucm_path.empty()) {
+    writePicture(ucm_path, ucmPicture(dasp::ultrametricContourMap(sp.labels, ucg)), scale);
   }
   if (!superpixels_path.empty()) {
     cv::Mat picture = frame.color.clone();
     picture.setTo(cv::Scalar(0, 0, 255), dasp::metrics::boundaryMap(sp.labels, cv::Mat()));
-    if (!cv::imwrite(superpixels_path, picture)) {
-      throw std::runtime_error("cannot write " + superpixels_path);
-    }
+    writePicture(superpixels_path, picture, scale);
   }
   if (!labels_path.empty()) {
     cv::Mat image;
@@ -264,7 +266,39 @@ int main(int argc, char** argv) {
   segment->add_option("--superpixel-overlay", superpixels_path,
                       "output PNG: superpixel boundaries over the colour image");
   segment->add_option("--labels", labels_path, "output 16-bit PNG: segment + 1, 0 = unlabelled");
+  double picture_scale = 1.0;
+  segment->add_option("--picture-scale", picture_scale, "size of the pictures (1 = frame size)")
+      ->capture_default_str();
+  segment->add_option("--color-weight", config.graph.weight_color, "lambda_c")
+      ->capture_default_str();
+  segment->add_option("--position-weight", config.graph.weight_position, "lambda_v")
+      ->capture_default_str();
+  segment->add_option("--normal-weight", config.graph.weight_normal, "lambda_n")
+      ->capture_default_str();
+  segment->add_option("--eigenvectors", config.spectral.eigenvector_count, "k")
+      ->capture_default_str();
+  segment->add_option("--theta", config.graph.min_border_pairs, "Theta (min border pairs)")
+      ->capture_default_str();
   add_common(segment);
+
+  // lccp
+  CLI::App* lccp_cmd = app.add_subcommand("lccp", "PCL LCCP segmentation of one frame (peer)");
+  dasp::peers::LccpConfig lccp_config;
+  lccp_cmd->add_option("--color", paths.color, "8-bit colour PNG")
+      ->required()
+      ->check(CLI::ExistingFile);
+  lccp_cmd->add_option("--depth", paths.depth, "16-bit depth PNG in millimetres")
+      ->required()
+      ->check(CLI::ExistingFile);
+  lccp_cmd
+      ->add_option("--lccp-seed-resolution", lccp_config.seed_resolution_m,
+                   "supervoxel seed resolution in metres")
+      ->capture_default_str();
+  lccp_cmd->add_flag("--lccp-single-camera-transform", lccp_config.single_camera_transform,
+                     "depth-dependent voxel grid (PCL example switch -tvoxel)");
+  lccp_cmd->add_option("--segments", segments_path, "output PNG: segments in false colours");
+  lccp_cmd->add_option("--picture-scale", picture_scale, "size of the pictures")
+      ->capture_default_str();
 
   // evaluate
   CLI::App* evaluate = app.add_subcommand("evaluate", "PR curves, ODS/OIS F1 and times");
@@ -312,7 +346,20 @@ int main(int argc, char** argv) {
     if (segment->parsed()) {
       paths.name = paths.color;
       return runSegment(paths, intrinsics, superpixels_kind, count, seed, threshold, config,
-                        segments_path, ucm_path, labels_path, superpixels_path);
+                        segments_path, ucm_path, labels_path, superpixels_path, picture_scale);
+    }
+    if (lccp_cmd->parsed()) {
+      paths.name = paths.color;
+      const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, intrinsics);
+      int supervoxels = 0;
+      const double t0 = threadCpuMilliseconds();
+      const cv::Mat labels = dasp::peers::computeLccp(frame, lccp_config, &supervoxels);
+      std::cout << "LCCP: " << supervoxels << " supervoxels, "
+                << dasp::metrics::countSegments(labels, cv::Mat()) << " segments, " << std::fixed
+                << std::setprecision(1) << threadCpuMilliseconds() - t0 << " ms (thread CPU)\n";
+      if (!segments_path.empty())
+        writePicture(segments_path, segmentsPicture(labels), picture_scale);
+      return 0;
     }
     std::vector<dasp::RgbdFramePaths> frames = dasp::listRgbdFolder(folder);
     frames.erase(std::remove_if(frames.begin(), frames.end(),
@@ -466,11 +513,11 @@ int main(int argc, char** argv) {
         r["eigenvectors"] = grid[g].spectral.eigenvector_count;
         const nlohmann::ordered_json c = curveJson(curves[g], times[g], frame_f1[g]);
         for (const auto& [key, value] : c.items()) r[key] = value;
-        std::cout << method << " c " << grid[g].graph.weight_color << " v "
-                  << grid[g].graph.weight_position << " n " << grid[g].graph.weight_normal << " k "
-                  << grid[g].spectral.eigenvector_count << " theta "
-                  << grid[g].graph.min_border_pairs << ": ODS F1 " << std::setprecision(4)
-                  << r["ods"]["f1"].get<double>()
+        std::cout << std::defaultfloat << std::setprecision(4) << method << " c "
+                  << grid[g].graph.weight_color << " v " << grid[g].graph.weight_position << " n "
+                  << grid[g].graph.weight_normal << " k " << grid[g].spectral.eigenvector_count
+                  << " theta " << grid[g].graph.min_border_pairs << ": ODS F1 "
+                  << std::setprecision(4) << r["ods"]["f1"].get<double>()
                   << " at t = " << r["ods"]["threshold"].get<double>() << ", OIS F1 "
                   << r["ois"]["f1"].get<double>() << ", " << std::setprecision(1) << std::fixed
                   << r["time_ms"]["segmentation_total"].get<double>() << " ms/frame"
