@@ -59,8 +59,8 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   setG0(f.g0);
   g0_tracker_ = G0Tracker(f, camera_, start);
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
-  expected_ = start;
-  last_normalised_ = start;
+  expected_ = HeadingVectorPose::from(start);
+  last_normalised_ = expected_;
 }
 
 void EventSlam2d::setG0(double g0) { schedule_ = makeG0Schedule(config_.filter, camera_, g0); }
@@ -95,15 +95,14 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
       since_resample_ -= f.resample_every;
     }
     // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
-    expected_ = particles_.weightedMean();
+    particles_.weightedMean(expected_.x, expected_.y, expected_.c, expected_.s);
     if (resampled && f.adapt_g0) {
-      const double g0 = g0_tracker_.update(f.resample_every, expected_);
+      const double g0 = g0_tracker_.update(f.resample_every, expected_.pose());
       if (g0 > 0.0) setG0(g0);
     }
     if (config_.splat == OccurrenceSplat::kExpectedPose) {
-      const double c = std::cos(expected_.theta);
-      const double s = std::sin(expected_.theta);
-      for (int j = 0; j < b; ++j) splat(expected_, c, s, index[j], 1.0f);
+      const Pose2 pose{expected_.x, expected_.y, 0.0};  // heading passed as (c, s)
+      for (int j = 0; j < b; ++j) splat(pose, expected_.c, expected_.s, index[j], 1.0f);
     } else {
       for (int p = 0; p < particles_.size(); ++p) {
         const auto w = static_cast<float>(particles_.normalisedWeight(p));
@@ -116,14 +115,15 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
     }
     // Normalisation (eq. 7.7), periodically: once the expected pose moved the image enough.
     if (imageMotionPx(last_normalised_, expected_) >= config_.normalisation_step_px) {
-      updateNormalisation(last_normalised_, expected_);
+      updateNormalisation(last_normalised_.pose(), expected_.pose());
       last_normalised_ = expected_;
     }
   }
 }
 
 Pose2 EventSlam2d::estimate() const {
-  return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best() : expected_;
+  return config_.filter.estimate == PoseEstimateMode::kBestParticle ? particles_.best()
+                                                                    : expected_.pose();
 }
 
 void EventSlam2d::splat(const Pose2& pose, double c, double s, std::uint32_t pixel, float weight) {
@@ -150,12 +150,14 @@ void EventSlam2d::splat(const Pose2& pose, double c, double s, std::uint32_t pix
   }
 }
 
-double EventSlam2d::imageMotionPx(const Pose2& a, const Pose2& b) const {
+double EventSlam2d::imageMotionPx(const HeadingVectorPose& a, const HeadingVectorPose& b) const {
   // Translation moves every pixel by |dt| / W_trig; rotation moves the outermost pixel by
   // |dtheta| times its radius.
-  const double dt = std::hypot(b.x - a.x, b.y - a.y) / camera_.wTrig();
-  const double dth = std::abs(std::remainder(b.theta - a.theta, 2.0 * M_PI));
-  return dt + dth * camera_.footprintRadius() / camera_.wTrig();
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  const double cos_d = a.c * b.c + a.s * b.s;
+  const double sin_d = std::abs(a.c * b.s - a.s * b.c);
+  const double turn = cos_d >= 0.0 ? sin_d : M_PI;
+  return (std::sqrt(dx * dx + dy * dy) + turn * camera_.footprintRadius()) / camera_.wTrig();
 }
 
 void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
@@ -193,6 +195,10 @@ void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
   const double cb = std::cos(to.theta), sb = std::sin(to.theta);
   const double cx_mid = 0.5 * (from.x + to.x);
   const double half_span = 0.5 * std::abs(from.x - to.x) + radius;
+  if (k1 == 0.0 && k2 == 0.0) {
+    updateNormalisationPinhole(from, to, r0, r1, cx_mid - half_span, cx_mid + half_span);
+    return;
+  }
   for (int r = r0; r <= r1; ++r) {
     const double wy = z.origin_y_m + (r + 0.5) * res;
     const int c0 =
@@ -216,6 +222,80 @@ void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
       normalisation_.data[k] += static_cast<float>(std::sqrt(du * du + dv * dv));  // eq. 7.7
       inverse_normalisation_.data[k] = 1.0f / (normalisation_.data[k] + z0_);
       map_.data[k] = occurrence_.data[k] * inverse_normalisation_.data[k];
+    }
+  }
+}
+
+namespace {
+
+// Columns c in [lo, hi] (inclusive, integers) where lo_bound <= f0 + c df < hi_bound, widened by
+// one column on each side; the caller keeps the exact per-cell test.
+void clipLinear(double f0, double df, double lo_bound, double hi_bound, int& lo, int& hi) {
+  if (df == 0.0) {
+    if (!(f0 >= lo_bound && f0 < hi_bound)) hi = lo - 1;
+    return;
+  }
+  double a = (lo_bound - f0) / df;
+  double b = (hi_bound - f0) / df;
+  if (a > b) std::swap(a, b);
+  lo = std::max(lo, static_cast<int>(std::max(-1e9, std::floor(a))) - 1);
+  hi = std::min(hi, static_cast<int>(std::min(1e9, std::ceil(b))) + 1);
+}
+
+}  // namespace
+
+void EventSlam2d::updateNormalisationPinhole(const Pose2& from, const Pose2& to, int r0, int r1,
+                                             double x_min, double x_max) {
+  // Without distortion a cell's pixel position is linear in the cell's column along a row, and
+  // so is its displacement between the two poses: per row, the visible columns follow from four
+  // linear inequalities and each cell costs a few multiply-adds and one square root.
+  const GridMap2f& z = normalisation_;
+  const CameraModel& cam = camera_.camera();
+  const double inv_w = 1.0 / camera_.wTrig();
+  const double res = z.resolution_m;
+  const double u_lo = -0.5 - cam.principal_point.x();
+  const double v_lo = -0.5 - cam.principal_point.y();
+  const double u_hi = cam.width - 0.5 - cam.principal_point.x();
+  const double v_hi = cam.height - 0.5 - cam.principal_point.y();
+  const double ca = std::cos(from.theta) * inv_w, sa = std::sin(from.theta) * inv_w;
+  const double cb = std::cos(to.theta) * inv_w, sb = std::sin(to.theta) * inv_w;
+  const int c_min = std::max(0, static_cast<int>(std::floor((x_min - z.origin_x_m) / res)));
+  const int c_max =
+      std::min(z.width - 1, static_cast<int>(std::ceil((x_max - z.origin_x_m) / res)));
+  // Offsets from the principal point [pixels] of cell column 0: ua(c) = ua0 + c dua, etc.
+  const double dua = ca * res, dva = -sa * res;
+  const double dub = cb * res, dvb = -sb * res;
+  float* zd = normalisation_.data.data();
+  float* inv_z = inverse_normalisation_.data.data();
+  float* md = map_.data.data();
+  const float* od = occurrence_.data.data();
+  for (int r = r0; r <= r1; ++r) {
+    const double wy = z.origin_y_m + (r + 0.5) * res;
+    const double x0 = z.origin_x_m + 0.5 * res;
+    const double ax = x0 - from.x, ay = wy - from.y;
+    const double bx = x0 - to.x, by = wy - to.y;
+    const double ua0 = ca * ax + sa * ay, va0 = -sa * ax + ca * ay;
+    const double ub0 = cb * bx + sb * by, vb0 = -sb * bx + cb * by;
+    int lo = c_min, hi = c_max;
+    clipLinear(ua0, dua, u_lo, u_hi, lo, hi);
+    clipLinear(va0, dva, v_lo, v_hi, lo, hi);
+    clipLinear(ub0, dub, u_lo, u_hi, lo, hi);
+    clipLinear(vb0, dvb, v_lo, v_hi, lo, hi);
+    const std::size_t row = static_cast<std::size_t>(r) * z.width;
+    for (int c = lo; c <= hi; ++c) {
+      const double ua = ua0 + c * dua, va = va0 + c * dva;
+      const double ub = ub0 + c * dub, vb = vb0 + c * dvb;
+      // A cell not visible under both poses is not updated (7.2.3).
+      if (!(ua >= u_lo && ua < u_hi && va >= v_lo && va < v_hi && ub >= u_lo && ub < u_hi &&
+            vb >= v_lo && vb < v_hi)) {
+        continue;
+      }
+      const double du = ua - ub;
+      const double dv = va - vb;
+      const std::size_t k = row + c;
+      zd[k] += static_cast<float>(std::sqrt(du * du + dv * dv));  // eq. 7.7
+      inv_z[k] = 1.0f / (zd[k] + z0_);
+      md[k] = od[k] * inv_z[k];
     }
   }
 }

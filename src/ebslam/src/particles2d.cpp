@@ -20,7 +20,7 @@ GridMap2f::GridMap2f(int w, int h, double res, double ox, double oy, float value
 
 namespace {
 
-constexpr int kNormalTableBits = 12;
+constexpr int kNormalTableBits = FastNormalGenerator::kTableBits;
 constexpr std::size_t kNormalTableSize = std::size_t{1} << kNormalTableBits;
 
 double inverseNormalCdf(double p) {
@@ -53,35 +53,11 @@ std::uint64_t splitMix64(std::uint64_t& x) {
   return z ^ (z >> 31);
 }
 
-std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-
 }  // namespace
 
 FastNormalGenerator::FastNormalGenerator(std::uint64_t seed) {
   for (auto& s : state_) s = splitMix64(seed);
   table_ = normalTable().data();  // built once, outside any timed loop
-}
-
-std::uint64_t FastNormalGenerator::nextU64() {
-  // xoshiro256++ (Blackman & Vigna).
-  const std::uint64_t result = rotl(state_[0] + state_[3], 23) + state_[0];
-  const std::uint64_t t = state_[1] << 17;
-  state_[2] ^= state_[0];
-  state_[3] ^= state_[1];
-  state_[1] ^= state_[2];
-  state_[0] ^= state_[3];
-  state_[2] ^= t;
-  state_[3] = rotl(state_[3], 45);
-  return result;
-}
-
-void FastNormalGenerator::normals4(float out[4]) {
-  const std::uint64_t r = nextU64();
-  constexpr std::uint64_t mask = kNormalTableSize - 1;
-  out[0] = table_[r & mask];
-  out[1] = table_[(r >> 16) & mask];
-  out[2] = table_[(r >> 32) & mask];
-  out[3] = table_[(r >> 48) & mask];
 }
 
 void ParticleSet2D::reset(int n, const Pose2& start, double spread_xy_m, double spread_theta_rad,
@@ -132,30 +108,37 @@ void ParticleSet2D::step(const std::uint32_t* pixel_index, int batch, const floa
     ps[i] = s;
   }
   // Sensor model: map value at each event's ceiling point under each particle's pose. Split into
-  // a branch-free index loop and a gather loop; points outside the grid read the trailing 0.
+  // a branch-free index loop (vectorised: the bounds test is a mask, not a branch) and a gather
+  // loop; points outside the grid read the trailing 0.
   float* __restrict sum = sum_.data();
   std::uint32_t* __restrict cell = cell_.data();
-  std::fill(sum_.begin(), sum_.end(), 0.0f);
   const auto inv_res = static_cast<float>(map.invResolution());
   const auto org_x = static_cast<float>(map.origin_x_m);
   const auto org_y = static_cast<float>(map.origin_y_m);
   const auto width = static_cast<float>(map.width);
   const auto height = static_cast<float>(map.height);
-  const auto outside = static_cast<std::uint32_t>(map.cellCount());
-  const std::uint32_t stride = static_cast<std::uint32_t>(map.width);
+  const auto outside = static_cast<std::int32_t>(map.cellCount());
+  const auto stride = static_cast<std::int32_t>(map.width);
   const float* data = map.data.data();
   for (int j = 0; j < batch; ++j) {
-    const float ox = offset_x[pixel_index[j]];
-    const float oy = offset_y[pixel_index[j]];
+    // Map coordinates [cells]: fc = (x + c ox - s oy - org_x) / res, folded per event.
+    const float ox = offset_x[pixel_index[j]] * inv_res;
+    const float oy = offset_y[pixel_index[j]] * inv_res;
+    const float bx = org_x * inv_res;
+    const float by = org_y * inv_res;
     for (std::size_t i = 0; i < n; ++i) {
-      const float fc = (px[i] + pc[i] * ox - ps[i] * oy - org_x) * inv_res;
-      const float fr = (py[i] + ps[i] * ox + pc[i] * oy - org_y) * inv_res;
-      const bool in = fc >= 0.0f && fr >= 0.0f && fc < width && fr < height;
-      const std::uint32_t k = static_cast<std::uint32_t>(in ? fr : 0.0f) * stride +
-                              static_cast<std::uint32_t>(in ? fc : 0.0f);
-      cell[i] = in ? k : outside;
+      const float fc = px[i] * inv_res + pc[i] * ox - ps[i] * oy - bx;
+      const float fr = py[i] * inv_res + ps[i] * ox + pc[i] * oy - by;
+      const bool in = (fc >= 0.0f) & (fr >= 0.0f) & (fc < width) & (fr < height);
+      // Particles stay within metres of the map: the casts cannot overflow.
+      const std::int32_t k = static_cast<std::int32_t>(fr) * stride + static_cast<std::int32_t>(fc);
+      cell[i] = static_cast<std::uint32_t>(in ? k : outside);
     }
-    for (std::size_t i = 0; i < n; ++i) sum[i] += data[cell[i]];
+    if (j == 0) {
+      for (std::size_t i = 0; i < n; ++i) sum[i] = data[cell[i]];
+    } else {
+      for (std::size_t i = 0; i < n; ++i) sum[i] += data[cell[i]];
+    }
   }
   // Score update with the decay applied to the global scale (eq. 6.29/6.30).
   const double factor = scores_.beginUpdate(decay);
@@ -204,21 +187,42 @@ bool ParticleSet2D::resampleSystematic(bool reset_scores) {
   return true;
 }
 
-Pose2 ParticleSet2D::weightedMean() const {
+void ParticleSet2D::weightedMean(double& x, double& y, double& cos_theta, double& sin_theta) const {
   const std::vector<double>& w = scores_.stored();
-  double total = 0.0;
-  for (double v : w) total += v;
-  const bool uniform = !(total > 0.0) || !std::isfinite(total);
-  double sx = 0.0, sy = 0.0, sc = 0.0, ss = 0.0;
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    const double wi = uniform ? 1.0 : w[i];
-    sx += wi * x_[i];
-    sy += wi * y_[i];
-    sc += wi * cos_[i];
-    ss += wi * sin_[i];
+  const std::size_t n = x_.size();
+  double total = 0.0, sx = 0.0, sy = 0.0, sc = 0.0, ss = 0.0;
+  // Runs once per batch in EB-SLAM-2D: vectorised reductions (-fopenmp-simd, no threads).
+#pragma omp simd reduction(+ : total, sx, sy, sc, ss)
+  for (std::size_t i = 0; i < n; ++i) {
+    total += w[i];
+    sx += w[i] * x_[i];
+    sy += w[i] * y_[i];
+    sc += w[i] * cos_[i];
+    ss += w[i] * sin_[i];
   }
-  const double norm = uniform ? static_cast<double>(x_.size()) : total;
-  return {sx / norm, sy / norm, std::atan2(ss, sc)};
+  if (!(total > 0.0) || !std::isfinite(total)) {  // no usable scores: plain mean
+    total = static_cast<double>(n);
+    sx = sy = sc = ss = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      sx += x_[i];
+      sy += y_[i];
+      sc += cos_[i];
+      ss += sin_[i];
+    }
+  }
+  x = sx / total;
+  y = sy / total;
+  const double length = std::sqrt(sc * sc + ss * ss);
+  cos_theta = length > 0.0 ? sc / length : 1.0;
+  sin_theta = length > 0.0 ? ss / length : 0.0;
+}
+
+Pose2 ParticleSet2D::weightedMean() const {
+  Pose2 p;
+  double c = 1.0, s = 0.0;
+  weightedMean(p.x, p.y, c, s);
+  p.theta = std::atan2(s, c);
+  return p;
 }
 
 Pose2 ParticleSet2D::best() const {

@@ -103,6 +103,37 @@ TEST(Ebslam2d, BuildsMapConsistentWithGroundTruth) {
   EXPECT_GT(aligned, 3.0 * std::abs(shifted));
 }
 
+// Without lens distortion the normalisation map Z is accumulated by a row-linear fast path; a
+// negligible distortion takes the general per-cell projection. Both must give the same Z.
+TEST(Ebslam2d, PinholeNormalisationMatchesGeneralProjection) {
+  const testing::SyntheticCeiling ceiling = testing::makeSyntheticCeiling(4.0, 0.01, 3);
+  const auto path = [](double t) { return testing::loopPath(t, 0.6, 0.3); };
+  const CeilingCamera pinhole(CameraModel{}, 2.59);
+  CameraModel almost_pinhole;
+  almost_pinhole.kappa1 = 1e-15;
+  const CeilingCamera general(almost_pinhole, 2.59);
+  const EventVector events = testing::generateSyntheticEvents(ceiling, pinhole, path, 0.0, 0.4);
+  ASSERT_GT(events.size(), 5000u);
+  Ebslam2dConfig config;
+  config.filter.g0 = 100.0;
+  EventSlam2d a(config, pinhole, path(0.0));
+  EventSlam2d b(config, general, path(0.0));
+  a.process(events);
+  b.process(events);
+  ASSERT_GT(a.normalisationUpdates(), 3u);
+  ASSERT_EQ(a.normalisationUpdates(), b.normalisationUpdates());
+  double total = 0.0, max_diff = 0.0;
+  std::size_t touched = 0;
+  for (std::size_t k = 0; k < a.normalisation().cellCount(); ++k) {
+    total += a.normalisation().data[k];
+    touched += a.normalisation().data[k] > 0.0f;
+    max_diff = std::max(max_diff, static_cast<double>(std::abs(a.normalisation().data[k] -
+                                                               b.normalisation().data[k])));
+  }
+  EXPECT_GT(touched, 10000u);
+  EXPECT_LT(max_diff, 1e-3 * total / static_cast<double>(touched));
+}
+
 TEST(Ebslam2d, BadInputIsRejected) {
   const CeilingCamera camera(CameraModel{}, 2.59);
   EventSlam2d slam(Ebslam2dConfig{}, camera);

@@ -59,13 +59,33 @@ struct GridMap2f {
 class FastNormalGenerator {
  public:
   explicit FastNormalGenerator(std::uint64_t seed);
-  std::uint64_t nextU64();
+  /// xoshiro256++ (Blackman & Vigna); inline: it runs once per particle and batch.
+  std::uint64_t nextU64() {
+    const std::uint64_t result = rotl(state_[0] + state_[3], 23) + state_[0];
+    const std::uint64_t t = state_[1] << 17;
+    state_[2] ^= state_[0];
+    state_[3] ^= state_[1];
+    state_[1] ^= state_[2];
+    state_[0] ^= state_[3];
+    state_[2] ^= t;
+    state_[3] = rotl(state_[3], 45);
+    return result;
+  }
   /// Uniform in [0, 1).
   double uniform() { return static_cast<double>(nextU64() >> 11) * 0x1.0p-53; }
-  /// Four independent standard normals from one 64-bit draw.
-  void normals4(float out[4]);
+  /// Four independent standard normals from one 64-bit draw (12 bits each).
+  void normals4(float out[4]) {
+    const std::uint64_t r = nextU64();
+    constexpr std::uint64_t mask = (std::uint64_t{1} << kTableBits) - 1;
+    out[0] = table_[r & mask];
+    out[1] = table_[(r >> 16) & mask];
+    out[2] = table_[(r >> 32) & mask];
+    out[3] = table_[(r >> 48) & mask];
+  }
+  static constexpr int kTableBits = 12;
 
  private:
+  static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
   std::array<std::uint64_t, 4> state_{};
   const float* table_ = nullptr;
 };
@@ -100,6 +120,9 @@ class ParticleSet2D {
   /// Score-weighted mean pose (heading as the angle of the weighted mean direction); the plain
   /// mean when all scores are zero.
   Pose2 weightedMean() const;
+  /// weightedMean with the heading as a unit vector (cos, sin), without trigonometry; (1, 0)
+  /// if the mean direction vanishes.
+  void weightedMean(double& x, double& y, double& cos_theta, double& sin_theta) const;
   /// Particle with the highest score.
   Pose2 best() const;
   Pose2 particle(int i) const;
