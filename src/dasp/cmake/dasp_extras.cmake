@@ -31,6 +31,7 @@ endif()
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   set_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/src/delta_density.cpp
     PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic;-fassociative-math;-fno-signed-zeros")
 endif()
 # Benchmarks compare against OpenCV ximgproc SLIC in the same run.

@@ -31,6 +31,54 @@ bool pixelOf(const Seed& p, const cv::Mat& density, int& x, int& y) {
   return x >= 0 && y >= 0 && x < density.cols && y < density.rows && density.at<float>(y, x) > 0.0f;
 }
 
+// realizedDensity without the input checks (deltaDensitySampling checked them already).
+cv::Mat realizedDensityUnchecked(const cv::Mat& density, const std::vector<Seed>& points,
+                                 float kernel_cutoff_sigma) {
+  cv::Mat valid;  // 1 where the density is positive, else 0: branch-free loops below
+  cv::threshold(density, valid, 0.0, 1.0, cv::THRESH_BINARY);
+  cv::Mat realized = cv::Mat::zeros(density.size(), CV_32FC1);
+  std::vector<float> weight_x, weight_y;
+  for (const Seed& p : points) {
+    int px = 0, py = 0;
+    if (!pixelOf(p, density, px, py)) continue;
+    const float rho = density.at<float>(py, px);
+    // K = rho exp(-pi rho d^2) = rho exp(-d^2 / (2 s^2)) with s^2 = 1 / (2 pi rho); separable
+    // into a row and a column factor.
+    const float sigma = 1.0f / std::sqrt(2.0f * kPi * rho);
+    const int reach = std::max(1, static_cast<int>(std::ceil(kernel_cutoff_sigma * sigma)));
+    const int x0 = std::max(0, px - reach), x1 = std::min(density.cols - 1, px + reach);
+    const int y0 = std::max(0, py - reach), y1 = std::min(density.rows - 1, py + reach);
+    weight_x.resize(static_cast<std::size_t>(x1 - x0 + 1));
+    weight_y.resize(static_cast<std::size_t>(y1 - y0 + 1));
+    for (int x = x0; x <= x1; ++x) {
+      const float dx = static_cast<float>(x) - p.u;
+      weight_x[static_cast<std::size_t>(x - x0)] = std::exp(-kPi * rho * dx * dx);
+    }
+    for (int y = y0; y <= y1; ++y) {
+      const float dy = static_cast<float>(y) - p.v;
+      weight_y[static_cast<std::size_t>(y - y0)] = std::exp(-kPi * rho * dy * dy);
+    }
+    double total = 0.0;  // kernel mass on pixels with density
+    for (int y = y0; y <= y1; ++y) {
+      const float* m = valid.ptr<float>(y);
+      float row = 0.0f;
+      for (int x = x0; x <= x1; ++x) row += m[x] * weight_x[static_cast<std::size_t>(x - x0)];
+      total += static_cast<double>(row) * weight_y[static_cast<std::size_t>(y - y0)];
+    }
+    if (!(total > 0.0)) continue;
+    const float scale = static_cast<float>(1.0 / total);  // unit mass over the valid pixels
+    for (int y = y0; y <= y1; ++y) {
+      const float* m = valid.ptr<float>(y);
+      float* r = realized.ptr<float>(y);
+      const float wy = weight_y[static_cast<std::size_t>(y - y0)] * scale;
+      for (int x = x0; x <= x1; ++x) {
+        r[x] += m[x] * weight_x[static_cast<std::size_t>(x - x0)] * wy;
+      }
+    }
+  }
+  return realized;
+}
+
 }  // namespace
 
 cv::Mat realizedDensity(const cv::Mat& density, const std::vector<Seed>& points,
@@ -39,39 +87,7 @@ cv::Mat realizedDensity(const cv::Mat& density, const std::vector<Seed>& points,
   if (!(kernel_cutoff_sigma > 0.0f)) {
     throw std::invalid_argument("realizedDensity: kernel_cutoff_sigma must be positive");
   }
-  cv::Mat realized = cv::Mat::zeros(density.size(), CV_32FC1);
-  std::vector<float> weights;
-  for (const Seed& p : points) {
-    int px = 0, py = 0;
-    if (!pixelOf(p, density, px, py)) continue;
-    const float rho = density.at<float>(py, px);
-    // K = rho exp(-pi rho d^2) = rho exp(-d^2 / (2 s^2)) with s^2 = 1 / (2 pi rho).
-    const float sigma = 1.0f / std::sqrt(2.0f * kPi * rho);
-    const int reach = std::max(1, static_cast<int>(std::ceil(kernel_cutoff_sigma * sigma)));
-    const int x0 = std::max(0, px - reach), x1 = std::min(density.cols - 1, px + reach);
-    const int y0 = std::max(0, py - reach), y1 = std::min(density.rows - 1, py + reach);
-    weights.assign(static_cast<std::size_t>(x1 - x0 + 1) * (y1 - y0 + 1), 0.0f);
-    double total = 0.0;
-    std::size_t w = 0;
-    for (int y = y0; y <= y1; ++y) {
-      const float* d = density.ptr<float>(y);
-      const float dy = static_cast<float>(y) - p.v;
-      for (int x = x0; x <= x1; ++x, ++w) {
-        if (d[x] <= 0.0f) continue;
-        const float dx = static_cast<float>(x) - p.u;
-        weights[w] = std::exp(-kPi * rho * (dx * dx + dy * dy));
-        total += weights[w];
-      }
-    }
-    if (!(total > 0.0)) continue;
-    const float scale = static_cast<float>(1.0 / total);  // unit mass over the valid pixels
-    w = 0;
-    for (int y = y0; y <= y1; ++y) {
-      float* r = realized.ptr<float>(y);
-      for (int x = x0; x <= x1; ++x, ++w) r[x] += weights[w] * scale;
-    }
-  }
-  return realized;
+  return realizedDensityUnchecked(density, points, kernel_cutoff_sigma);
 }
 
 NearestPointIndex::NearestPointIndex(const std::vector<Seed>& points, int width, int height,
@@ -165,7 +181,10 @@ DeltaDensityResult deltaDensitySampling(const cv::Mat& density, const std::vecto
     }
   }
 
-  const cv::Mat realized = realizedDensity(density, live, config.kernel_cutoff_sigma);
+  if (!(config.kernel_cutoff_sigma > 0.0f)) {
+    throw std::invalid_argument("delta density sampling: kernel_cutoff_sigma must be positive");
+  }
+  const cv::Mat realized = realizedDensityUnchecked(density, live, config.kernel_cutoff_sigma);
   cv::Mat delta = density - realized;  // eq. 5.4, zero where the density is zero
   const cv::Mat valid = density > 0.0f;
   const int valid_pixels = cv::countNonZero(valid);
@@ -174,14 +193,32 @@ DeltaDensityResult deltaDensitySampling(const cv::Mat& density, const std::vecto
     const double mean_rho = target_mass / valid_pixels;
     const double sigma = config.smoothing_radius_multiple / std::sqrt(kPi * mean_rho);
     // Normalised convolution over the valid pixels: smoothing does not leak mass into pixels
-    // without density (which would make SPDS remove points at every depth border).
+    // without density (which would make SPDS remove points at every depth border). It runs on
+    // blocks of b x b pixels (mass sums) with sigma / b of about 2 blocks and is upsampled
+    // bilinearly: sigma is several pixels, so this costs far less than a full-size blur.
+    const int block = std::max(1, static_cast<int>(std::floor(sigma / 2.0)));
+    const cv::Size coarse_size((density.cols + block - 1) / block,
+                               (density.rows + block - 1) / block);
+    cv::Mat padded_delta, padded_mask;
     cv::Mat mask_f;
     valid.convertTo(mask_f, CV_32F, 1.0 / 255.0);
-    cv::Mat blurred_delta, blurred_mask;
-    cv::GaussianBlur(delta, blurred_delta, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
-    cv::GaussianBlur(mask_f, blurred_mask, cv::Size(0, 0), sigma, sigma, cv::BORDER_REFLECT);
-    cv::Mat smoothed;
-    cv::divide(blurred_delta, cv::max(blurred_mask, 1e-6), smoothed);
+    cv::copyMakeBorder(delta, padded_delta, 0, coarse_size.height * block - density.rows, 0,
+                       coarse_size.width * block - density.cols, cv::BORDER_CONSTANT, 0.0);
+    cv::copyMakeBorder(mask_f, padded_mask, 0, coarse_size.height * block - density.rows, 0,
+                       coarse_size.width * block - density.cols, cv::BORDER_CONSTANT, 0.0);
+    cv::Mat coarse_delta, coarse_mask;  // block means (mass / block^2; the factor cancels)
+    cv::resize(padded_delta, coarse_delta, coarse_size, 0, 0, cv::INTER_AREA);
+    cv::resize(padded_mask, coarse_mask, coarse_size, 0, 0, cv::INTER_AREA);
+    const double coarse_sigma = sigma / block;
+    cv::GaussianBlur(coarse_delta, coarse_delta, cv::Size(0, 0), coarse_sigma, coarse_sigma,
+                     cv::BORDER_REFLECT);
+    cv::GaussianBlur(coarse_mask, coarse_mask, cv::Size(0, 0), coarse_sigma, coarse_sigma,
+                     cv::BORDER_REFLECT);
+    cv::Mat coarse_smoothed;
+    cv::divide(coarse_delta, cv::max(coarse_mask, 1e-6), coarse_smoothed);
+    cv::Mat upsampled;
+    cv::resize(coarse_smoothed, upsampled, padded_delta.size(), 0, 0, cv::INTER_LINEAR);
+    cv::Mat smoothed = upsampled(cv::Rect(0, 0, density.cols, density.rows)).clone();
     smoothed.setTo(0.0f, ~valid);
     // Restore the exact integral of Delta rho (normalised convolution only nearly keeps it), so
     // that the expected point count stays integral(rho).

@@ -49,12 +49,12 @@ HysteresisResult hysteresisSegmentation(const WeightedGraph& boundary_graph,
     if (e.a < 0 || e.b < 0 || e.a >= n || e.b >= n) {
       throw std::invalid_argument("hysteresisSegmentation: edge out of range");
     }
-    if (e.weight > config.grant) break;  // no rule can merge any later edge
+    if (!(e.weight < config.grant)) break;  // no rule can merge any later edge
     const std::int64_t la = supervised[static_cast<std::size_t>(e.a)];
     const std::int64_t lb = supervised[static_cast<std::size_t>(e.b)];
-    bool merge = e.weight <= config.force;                                // forced merge
-    if (!merge && (la < 0 || lb < 0)) merge = e.weight <= config.normal;  // normal merge
-    if (!merge && la >= 0 && la == lb) merge = e.weight <= config.grant;  // granted merge
+    bool merge = e.weight < config.force;                                // forced merge
+    if (!merge && (la < 0 || lb < 0)) merge = e.weight < config.normal;  // normal merge
+    if (!merge && la >= 0 && la == lb) merge = e.weight < config.grant;  // granted merge
     if (!merge) continue;
     const int ra = findRoot(parent, e.a), rb = findRoot(parent, e.b);
     if (ra != rb) parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);

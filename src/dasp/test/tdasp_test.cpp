@@ -251,7 +251,10 @@ TEST(Strands, StrandCountStaysBounded) {
 }
 
 TEST(Hysteresis, ThreeThresholdsDependOnSupervision) {
-  HysteresisConfig config;  // 0.04 / 0.08 / 0.16
+  HysteresisConfig config;
+  config.force = 0.04f;
+  config.normal = 0.08f;
+  config.grant = 0.16f;
   WeightedGraph g;
   g.node_count = 6;
   g.edges = {{0, 1, 0.12f},   // same supervised label: granted

@@ -25,14 +25,16 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
-#include <numeric>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "dasp/delta_density.h"
 #include "dasp/metrics.h"
 #include "dasp/rgbd_io.h"
+#include "dasp/segmentation.h"
 #include "dasp/spectral.h"
+#include "dasp/stages.h"
 #include "dasp/superpixel_graph.h"
 #include "dasp/tdasp.h"
 #include "dasp/temporal_metrics.h"
@@ -61,44 +63,6 @@ std::vector<Eigen::Isometry3f> readPoses(const fs::path& path) {
   return poses;
 }
 
-// s-DASP of one frame: DASP, superpixel graph, globalisation, then the connected components of
-// the edges whose globalised weight is <= threshold, as superpixel label -> segment label.
-std::vector<int> sdaspSegments(const dasp::Superpixels& superpixels,
-                               const dasp::SuperpixelGraphConfig& graph_config,
-                               const dasp::SpectralConfig& spectral, float threshold) {
-  const dasp::WeightedGraph graph = dasp::buildSuperpixelGraph(superpixels, graph_config);
-  const std::vector<float> global = dasp::globalizeEdgeWeights(graph, spectral);
-  std::vector<int> parent(static_cast<std::size_t>(graph.node_count));
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](int i) {
-    while (parent[static_cast<std::size_t>(i)] != i) {
-      i = parent[static_cast<std::size_t>(i)] =
-          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
-    }
-    return i;
-  };
-  for (std::size_t e = 0; e < graph.edges.size(); ++e) {
-    if (global[e] > threshold) continue;
-    const int a = root(graph.edges[e].a), b = root(graph.edges[e].b);
-    if (a != b) parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
-  }
-  std::vector<int> segment(parent.size());
-  for (std::size_t i = 0; i < parent.size(); ++i) segment[i] = root(static_cast<int>(i));
-  return segment;
-}
-
-cv::Mat pixelLabels(const cv::Mat& superpixel_labels, const std::vector<int>& segment_of) {
-  cv::Mat out(superpixel_labels.size(), CV_32SC1);
-  for (int y = 0; y < out.rows; ++y) {
-    const int* l = superpixel_labels.ptr<int>(y);
-    int* o = out.ptr<int>(y);
-    for (int x = 0; x < out.cols; ++x) {
-      o[x] = l[x] >= 0 ? segment_of[static_cast<std::size_t>(l[x])] : -1;
-    }
-  }
-  return out;
-}
-
 struct FrameResult {
   std::map<std::string, double> values;
   cv::Mat segments;  // pixel segment labels
@@ -125,6 +89,31 @@ cv::Mat colourise(const cv::Mat& labels) {
           l < 0 ? cv::Vec3b(0, 0, 0)
                 : cv::Vec3b(64 + (h & 0x7f), 64 + ((h >> 8) & 0x7f), 64 + ((h >> 16) & 0x7f));
     }
+  }
+  return out;
+}
+
+// Share of points that Delta Density Sampling removes or adds when the density did not change
+// (the points are an SPDS sample of the same density), per smoothing radius; 5 sampler seeds.
+nlohmann::json ddsChurn(const dasp::RgbdFrame& frame, const dasp::DaspConfig& dasp_config) {
+  const dasp::PixelFeatures features = dasp::computeFeatures(frame, dasp_config);
+  const cv::Mat density = dasp::computeDepthDensity(
+      features, dasp::radiusForCount(features, dasp_config.superpixel_count));
+  nlohmann::json out = nlohmann::json::object();
+  for (const float smoothing : {0.0f, 0.5f, 1.0f, 2.0f, 3.0f}) {
+    double churn = 0.0;
+    const int runs = 5;
+    for (int run = 0; run < runs; ++run) {
+      const auto points = dasp::sampleSpds(density, true, 1000 + run);
+      dasp::DeltaDensityConfig c;
+      c.smoothing_radius_multiple = smoothing;
+      const auto r = dasp::deltaDensitySampling(density, points, c, 2000 + run);
+      churn += static_cast<double>(r.added + r.removed_by_density + r.removed_invalid) /
+               static_cast<double>(points.size()) / runs;
+    }
+    std::ostringstream key;
+    key << smoothing;
+    out[key.str()] = churn;
   }
   return out;
 }
@@ -166,6 +155,8 @@ int main(int argc, char** argv) {
         throw std::runtime_error(folder + ": frame and pose counts differ");
       }
       dasp::TemporalDasp tdasp(config);
+      const nlohmann::json churn =
+          ddsChurn(dasp::loadRgbdFrame(frames.front(), intrinsics), config.superpixels.dasp);
       std::vector<FrameResult> t_results, s_results;
       std::vector<cv::Mat> depths, truths, masks;
       for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -197,9 +188,13 @@ int main(int argc, char** argv) {
         FrameResult s;
         const auto start = std::chrono::steady_clock::now();
         const dasp::Superpixels sp = dasp::computeDasp(frame, config.superpixels.dasp);
-        const std::vector<int> segment_of =
-            sdaspSegments(sp, config.strands.graph, config.spectral, config.hysteresis.normal);
-        s.segments = pixelLabels(sp.labels, segment_of);
+        dasp::SdaspConfig sdasp_config;
+        sdasp_config.graph = config.strands.graph;
+        sdasp_config.spectral = config.spectral;
+        sdasp_config.threshold = config.hysteresis.normal;
+        const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, sdasp_config);
+        s.segments =
+            dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, sdasp_config.threshold));
         s.values["time_ms"] =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                 .count();
@@ -259,6 +254,7 @@ int main(int argc, char** argv) {
       summary["frames"] = frames.size();
       summary["superpixels"] = superpixel_count;
       summary["seed"] = seed;
+      summary["dds_churn_static"] = churn;
       for (const auto& [method, results] :
            {std::pair<std::string, const std::vector<FrameResult>*>{"tdasp", &t_results},
             {"sdasp", &s_results}}) {

@@ -12,15 +12,18 @@
 namespace dasp {
 
 /// The three thresholds t_force < t_normal < t_grant on the boundary weights (globalised weights
-/// normalised to [0, 1] by their maximum, GlobalWeightNormalization::kMax). The thesis gives no
-/// values; t_normal is the s-DASP segmentation threshold, the other two are a band around it.
+/// normalised to [0, 1] by their maximum, GlobalWeightNormalization::kMax). An edge merges when
+/// its weight is below the threshold of its case (the s-DASP convention of segmentGraph; the
+/// thesis writes <=). The thesis gives no values: t_normal is the s-DASP threshold
+/// (SdaspConfig::threshold, chosen on the OSD learn split), the other two a band of a factor 2
+/// around it.
 struct HysteresisConfig {
   /// Forced merge: any two nodes, even with different supervised labels (low confidence).
-  float force = 0.04f;
+  float force = 0.075f;
   /// Normal merge: at least one of the two labels is not supervised (medium confidence).
-  float normal = 0.08f;
+  float normal = 0.15f;
   /// Granted merge: both labels supervised and identical (high confidence).
-  float grant = 0.16f;
+  float grant = 0.3f;
 };
 
 /// Result of one hysteresis segmentation.
