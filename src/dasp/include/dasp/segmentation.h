@@ -73,7 +73,7 @@ struct SdaspConfig {
   SpectralConfig spectral;
   /// Default cut threshold on the normalised UCG weights: the ODS threshold of s-DASP over the
   /// 45 OSD learn frames (docs/results/sdasp.md). The thesis leaves it free (§4.3.3).
-  float threshold = 0.15f;
+  float threshold = 0.11f;
 };
 
 /// The ultrametric contour graph of a superpixel result: neighbourhood graph, then globalised
