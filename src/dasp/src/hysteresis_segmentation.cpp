@@ -42,22 +42,41 @@ HysteresisResult hysteresisSegmentation(const WeightedGraph& boundary_graph,
     return boundary_graph.edges[static_cast<std::size_t>(x)].weight <
            boundary_graph.edges[static_cast<std::size_t>(y)].weight;
   });
+  // The rules look at the labels of the current segments (eq. 5.19 uses the labelling Gamma_i
+  // that the merges so far produced), not of the single strands: a segment is supervised if it
+  // holds a supervised strand, so a new strand that joined segment A cannot then bridge A to a
+  // different supervised segment B by a normal merge.
   std::vector<int> parent(static_cast<std::size_t>(n));
   std::iota(parent.begin(), parent.end(), 0);
+  std::vector<std::int64_t> segment_label(supervised);  // per root
+  std::vector<double> supervised_size(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    if (supervised[static_cast<std::size_t>(i)] >= 0) {
+      supervised_size[static_cast<std::size_t>(i)] =
+          node_size.empty() ? 1.0 : node_size[static_cast<std::size_t>(i)];
+    }
+  }
   for (const int index : order) {
     const GraphEdge& e = boundary_graph.edges[static_cast<std::size_t>(index)];
     if (e.a < 0 || e.b < 0 || e.a >= n || e.b >= n) {
       throw std::invalid_argument("hysteresisSegmentation: edge out of range");
     }
     if (!(e.weight < config.grant)) break;  // no rule can merge any later edge
-    const std::int64_t la = supervised[static_cast<std::size_t>(e.a)];
-    const std::int64_t lb = supervised[static_cast<std::size_t>(e.b)];
+    const int ra = findRoot(parent, e.a), rb = findRoot(parent, e.b);
+    if (ra == rb) continue;
+    const std::int64_t la = segment_label[static_cast<std::size_t>(ra)];
+    const std::int64_t lb = segment_label[static_cast<std::size_t>(rb)];
     bool merge = e.weight < config.force;                                // forced merge
     if (!merge && (la < 0 || lb < 0)) merge = e.weight < config.normal;  // normal merge
     if (!merge && la >= 0 && la == lb) merge = e.weight < config.grant;  // granted merge
     if (!merge) continue;
-    const int ra = findRoot(parent, e.a), rb = findRoot(parent, e.b);
-    if (ra != rb) parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+    const int root = std::min(ra, rb), child = std::max(ra, rb);
+    parent[static_cast<std::size_t>(child)] = root;
+    // The merged segment carries the label of its heavier supervised part.
+    const double sa = supervised_size[static_cast<std::size_t>(ra)];
+    const double sb = supervised_size[static_cast<std::size_t>(rb)];
+    segment_label[static_cast<std::size_t>(root)] = lb < 0 || (la >= 0 && sa >= sb) ? la : lb;
+    supervised_size[static_cast<std::size_t>(root)] = sa + sb;
   }
   // 3. Connected components with their size and label histogram.
   std::vector<int> component(static_cast<std::size_t>(n), -1);

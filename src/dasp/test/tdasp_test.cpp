@@ -273,6 +273,15 @@ TEST(Hysteresis, ThreeThresholdsDependOnSupervision) {
   EXPECT_EQ(r.labels[4], r.labels[5]);
   EXPECT_TRUE(r.labels[4] == 11 || r.labels[4] == 12);
   EXPECT_EQ(r.component_count, 3);
+  // A new node similar to two different supervised segments joins one of them but does not
+  // bridge them (the rules use the labels of the segments merged so far).
+  g.node_count = 3;
+  g.edges = {{0, 1, 0.05f}, {1, 2, 0.06f}};
+  const HysteresisResult bridge = hysteresisSegmentation(g, {1, -1, 2}, {}, config, next);
+  EXPECT_EQ(bridge.labels[0], 1);
+  EXPECT_EQ(bridge.labels[1], 1);
+  EXPECT_EQ(bridge.labels[2], 2);
+  g.node_count = 6;
   // A supervised segment that falls apart keeps its label on the larger piece only.
   g.edges = {};
   const HysteresisResult split =

@@ -35,6 +35,8 @@ struct HysteresisResult {
 };
 
 /// Segments `boundary_graph` (edge weight = boundary strength, smaller = more similar).
+/// The three merge rules look at the labels of the segments merged so far (a segment is
+/// supervised by the heaviest previous label it holds), as eq. 5.19 does.
 /// supervised[i]: label of node i in the previous frame (>= 0) or -1 (not supervised: new node).
 /// node_size: size used to order the components (e.g. pixels), empty = every node counts 1.
 /// New labels are taken from next_label, which is advanced. Throws std::invalid_argument when
