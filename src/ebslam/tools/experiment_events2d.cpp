@@ -2,7 +2,9 @@
 // motion-capture trajectory, an eDVS looking up at a ceiling 2.59 m above is driven along the
 // planar robot path (event simulator), then EB-PF (known ceiling edge map) and EB-SLAM-2D
 // (N = 5, 10, 25, 75) run on the events with several seeds. Writes into --out:
-//   runs.csv               one line per (trajectory, method, N, B, seed): RMSE, failure, events/s
+//   runs.csv               one line per (trajectory, method, N, B, K, G0, seed): RMSE, failure,
+//                          events/s; EB-PF also without latency compensation and its best time
+//                          offset; methods ebpf_g0 / ebslam2d_g0 are the G0 sweeps
 //   <traj>/events.ebe, ground_truth.tum, ceiling_edges.png, ceiling.png  (cached simulation)
 //   <traj>/ebpf_s<seed>.tum, slam_N<n>_s<seed>.tum (+ _map.png for the first seed)
 // docs/results/events2d.md is generated from it by scripts/events2d_report.py; the whole
@@ -112,13 +114,18 @@ Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duratio
   return s;
 }
 
-// Position / rotation RMSE of an EB-PF run in the map (= world) frame, no alignment.
-std::pair<double, double> directRmse(const Trajectory& estimated, const Trajectory& truth) {
+// Position / rotation RMSE of an EB-PF run in the map (= world) frame, no alignment; the
+// estimate at time t is compared with the ground truth at t + offset_s, using every `stride`-th
+// estimate.
+std::pair<double, double> directRmse(const Trajectory& estimated, const Trajectory& truth,
+                                     double offset_s = 0.0, std::size_t stride = 1) {
   double sp = 0.0, sr = 0.0;
   int n = 0;
-  for (const StampedPose& e : estimated) {
-    if (e.t_s < truth.front().t_s || e.t_s > truth.back().t_s) continue;
-    const StampedPose g = interpolatePose(truth, e.t_s);
+  for (std::size_t i = 0; i < estimated.size(); i += stride) {
+    const StampedPose& e = estimated[i];
+    const double t = e.t_s + offset_s;
+    if (t < truth.front().t_s || t > truth.back().t_s) continue;
+    const StampedPose g = interpolatePose(truth, t);
     sp += (e.position.head<2>() - g.position.head<2>()).squaredNorm();
     const double dth =
         std::remainder(tools::toPose2(e).theta - tools::toPose2(g).theta, 2.0 * M_PI);
@@ -145,6 +152,31 @@ Trajectory meanFiltered(const Trajectory& t, int half) {
   return out;
 }
 
+// Time offset [s] that minimises the direct position RMSE (the lag of the estimate behind the
+// ground truth is -offset): 5 ms grid over [-80, 40] ms, then 1 ms around the best.
+double bestTimeOffset(const Trajectory& estimated, const Trajectory& truth) {
+  const auto cost = [&](double off) { return directRmse(estimated, truth, off, 4).first; };
+  double best = 0.0, best_cost = cost(0.0);
+  for (int ms = -80; ms <= 40; ms += 5) {
+    const double c = cost(1e-3 * ms);
+    if (c < best_cost) best_cost = c, best = 1e-3 * ms;
+  }
+  const double centre = best;
+  for (int ms = -4; ms <= 4; ++ms) {
+    const double c = cost(centre + 1e-3 * ms);
+    if (c < best_cost) best_cost = c, best = centre + 1e-3 * ms;
+  }
+  return best;
+}
+
+std::vector<double> parseDoubles(const std::string& text) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
+  return out;
+}
+
 std::vector<int> parseList(const std::string& text) {
   std::vector<int> out;
   std::stringstream ss(text);
@@ -164,8 +196,11 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   int seeds = 3;
   double failure_m = 0.3;
-  double g0_ebpf = 60.0;
-  double g0_slam = 30.0;
+  double g0_ebpf = EbpfConfig{}.filter.g0;
+  double g0_slam = Ebslam2dConfig{}.filter.g0;
+  double latency_s = 0.02;
+  std::string g0_sweep_ebpf = "30,60,100,250";
+  std::string g0_sweep_slam = "30,60,100";
   int batch = 3;
   app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
       ->capture_default_str();
@@ -182,6 +217,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--g0-ebpf", g0_ebpf, "G0 of EB-PF")->capture_default_str();
   app.add_option("--g0-slam", g0_slam, "G0 of EB-SLAM-2D")->capture_default_str();
+  app.add_option("--ebpf-latency", latency_s,
+                 "EB-PF latency compensation [s] (EventFilterConfig::latency_compensation_s)")
+      ->capture_default_str();
+  app.add_option("--g0-sweep-ebpf", g0_sweep_ebpf,
+                 "G0 values compared for EB-PF (first K of --ebpf-resample; empty: none)")
+      ->capture_default_str();
+  app.add_option("--g0-sweep-slam", g0_sweep_slam,
+                 "G0 values compared for EB-SLAM-2D at N = 10 (empty: none)")
+      ->capture_default_str();
   app.add_option("-B,--batch", batch, "batch size B")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
@@ -196,9 +240,9 @@ int main(int argc, char** argv) {
       throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
     fs::create_directories(out_dir);
     std::ofstream csv(fs::path(out_dir) / "runs.csv");
-    csv << "trajectory,method,particles,batch,resample,seed,events,duration_s,rmse_pos_m,rmse_rot_"
-           "deg,"
-           "failed,events_per_s,rmse_pos_smoothed_m\n";
+    csv << "trajectory,method,particles,batch,resample,g0,latency_s,seed,events,duration_s,"
+           "rmse_pos_m,rmse_rot_deg,failed,events_per_s,rmse_pos_smoothed_m,rmse_pos_raw_m,"
+           "best_offset_s\n";
     const CeilingCamera camera(CameraModel{}, kThesisCeilingHeightM);
     for (const fs::path& mocap : mocap_files) {
       std::string name = mocap.filename().string();
@@ -230,62 +274,93 @@ int main(int argc, char** argv) {
                                          fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
         }
       }
-      for (int k : parseList(ebpf_resample_text)) {
-        for (int seed = 1; seed <= seeds; ++seed) {
-          EbpfConfig config;
-          config.filter.resample_every = k;
-          config.filter.g0 = g0_ebpf;
-          config.filter.batch_size = batch;
-          config.filter.seed = static_cast<std::uint64_t>(seed);
-          EventParticleFilter filter(config, camera, likelihood, start);
-          Trajectory estimate;
-          const double seconds = tools::runFilter(filter, run.events, 100, estimate);
+      const auto runEbpf = [&](const std::string& method, int k, double g0, int seed, bool save) {
+        EbpfConfig config;
+        config.filter.resample_every = k;
+        config.filter.g0 = g0;
+        config.filter.batch_size = batch;
+        config.filter.latency_compensation_s = latency_s;
+        config.filter.seed = static_cast<std::uint64_t>(seed);
+        EventParticleFilter filter(config, camera, likelihood, start);
+        // As tools::runFilter, recording the compensated and the raw estimate.
+        Trajectory estimate, raw;
+        const auto t_start = std::chrono::steady_clock::now();
+        for (std::size_t i = 0; i < run.events.size(); i += 100) {
+          const std::size_t n = std::min<std::size_t>(100, run.events.size() - i);
+          filter.process(run.events.data() + i, n);
+          const double t = static_cast<double>(run.events[i + n - 1].t_us) * 1e-6;
+          if (!estimate.empty() && t <= estimate.back().t_s) continue;
+          estimate.push_back(tools::toStampedPose(t, filter.estimate()));
+          raw.push_back(tools::toStampedPose(t, filter.rawEstimate()));
+        }
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+        if (save) {
           writeTumTrajectory(
               (dir / ("ebpf_K" + std::to_string(k) + "_s" + std::to_string(seed) + ".tum"))
                   .string(),
               estimate);
-          const auto [pos, rot] = directRmse(estimate, run.ground_truth);
-          const bool failed = !(pos <= failure_m);
-          const double smoothed = directRmse(meanFiltered(estimate, 10), run.ground_truth).first;
-          csv << name << ",ebpf," << config.filter.num_particles << ',' << batch << ',' << k << ','
-              << seed << ',' << run.events.size() << ',' << run_duration << ',' << pos << ',' << rot
-              << ',' << failed << ',' << run.events.size() / seconds << ',' << smoothed << '\n';
-          std::printf(
-              "  EB-PF   N=%3d K=%3d seed %d: RMSE %.2f cm %.2f deg (smoothed %.2f cm), %.0f "
-              "events/s\n",
-              config.filter.num_particles, k, seed, pos * 100, rot, smoothed * 100,
-              run.events.size() / seconds);
-          std::fflush(stdout);
-          csv.flush();
-          csv.flush();
         }
-      }
-      for (int n : parseList(particles_text)) {
-        for (int seed = 1; seed <= seeds; ++seed) {
-          Ebslam2dConfig config;
-          config.filter.g0 = g0_slam;
-          config.filter.batch_size = batch;
-          config.filter.num_particles = n;
-          config.filter.seed = static_cast<std::uint64_t>(seed);
-          EventSlam2d slam(config, camera, start);
-          Trajectory estimate;
-          const double seconds = tools::runFilter(slam, run.events, 100, estimate);
-          const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
+        const auto [pos, rot] = directRmse(estimate, run.ground_truth);
+        const double pos_raw = directRmse(raw, run.ground_truth).first;
+        const double offset = bestTimeOffset(raw, run.ground_truth);
+        const bool failed = !(pos <= failure_m);
+        const double smoothed = directRmse(meanFiltered(estimate, 10), run.ground_truth).first;
+        csv << name << ',' << method << ',' << config.filter.num_particles << ',' << batch << ','
+            << k << ',' << g0 << ',' << latency_s << ',' << seed << ',' << run.events.size() << ','
+            << run_duration << ',' << pos << ',' << rot << ',' << failed << ','
+            << run.events.size() / seconds << ',' << smoothed << ',' << pos_raw << ',' << offset
+            << '\n';
+        csv.flush();
+        std::printf(
+            "  %-8s N=%3d K=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg (raw %.2f cm, best "
+            "offset %+.0f ms), %.0f events/s\n",
+            method.c_str(), config.filter.num_particles, k, g0, seed, pos * 100, rot, pos_raw * 100,
+            offset * 1e3, run.events.size() / seconds);
+        std::fflush(stdout);
+      };
+      const auto runSlam = [&](const std::string& method, int n, double g0, int seed, bool save) {
+        Ebslam2dConfig config;
+        config.filter.g0 = g0;
+        config.filter.batch_size = batch;
+        config.filter.num_particles = n;
+        config.filter.seed = static_cast<std::uint64_t>(seed);
+        EventSlam2d slam(config, camera, start);
+        Trajectory estimate;
+        const double seconds = tools::runFilter(slam, run.events, 100, estimate);
+        const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
+        if (save) {
           writeTumTrajectory((dir / (stem + ".tum")).string(), estimate);
           if (seed == 1) cv::imwrite((dir / (stem + "_map.png")).string(), mapToImage(slam.map()));
-          const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
-          const bool failed = !(e.position_rmse_m <= failure_m);
-          csv << name << ",ebslam2d," << n << ',' << batch << ',' << config.filter.resample_every
-              << ',' << seed << ',' << run.events.size() << ',' << run_duration << ','
-              << e.position_rmse_m << ',' << e.rotation_rmse_deg << ',' << failed << ','
-              << run.events.size() / seconds << ",\n";
-          std::printf("  EB-SLAM N=%3d seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n", n, seed,
-                      e.position_rmse_m * 100, e.rotation_rmse_deg, failed ? " (diverged)" : "",
-                      run.events.size() / seconds);
-          std::fflush(stdout);
-          csv.flush();
-          csv.flush();
         }
+        const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
+        const bool failed = !(e.position_rmse_m <= failure_m);
+        csv << name << ',' << method << ',' << n << ',' << batch << ','
+            << config.filter.resample_every << ',' << g0 << ",0," << seed << ','
+            << run.events.size() << ',' << run_duration << ',' << e.position_rmse_m << ','
+            << e.rotation_rmse_deg << ',' << failed << ',' << run.events.size() / seconds
+            << ",,,\n";
+        csv.flush();
+        std::printf("  %-8s N=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n",
+                    method.c_str(), n, g0, seed, e.position_rmse_m * 100, e.rotation_rmse_deg,
+                    failed ? " (diverged)" : "", run.events.size() / seconds);
+        std::fflush(stdout);
+      };
+      const std::vector<int> ebpf_k = parseList(ebpf_resample_text);
+      for (int k : ebpf_k) {
+        for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf", k, g0_ebpf, seed, true);
+      }
+      for (int n : parseList(particles_text)) {
+        for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d", n, g0_slam, seed, true);
+      }
+      // G0 sweeps over every trajectory and seed: the defaults are chosen on the whole set.
+      for (double g0 : parseDoubles(g0_sweep_ebpf)) {
+        if (ebpf_k.empty() || g0 == g0_ebpf) continue;  // the main runs above
+        for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf_g0", ebpf_k[0], g0, seed, false);
+      }
+      for (double g0 : parseDoubles(g0_sweep_slam)) {
+        if (g0 == g0_slam) continue;
+        for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d_g0", 10, g0, seed, false);
       }
     }
   } catch (const std::exception& e) {
