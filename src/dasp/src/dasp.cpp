@@ -19,6 +19,7 @@ struct RunParams {
   int iterations;
   bool enforce_connectivity;
   float min_size_fraction;
+  float depth_jump_ratio;  // > 0: connectivity on the surface (RGB-D methods), 0: in the image
 };
 
 // SPDS/grid/random seeds, DALIC iterations, connectivity and the superpoint fit.
@@ -44,7 +45,13 @@ Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& 
   // indices into the superpixel vector. With it, a superpixel whose largest piece holds less
   // than min_size_fraction of one superpixel's density mass is purged (as during DALIC).
   if (run.enforce_connectivity) {
-    enforceConnectivity(result.labels, valid, density, run.min_size_fraction);
+    cv::Mat depth;  // surface connectivity for the RGB-D methods (see enforceConnectivity)
+    if (features.hasDepth() && run.depth_jump_ratio > 0.0f) {
+      depth =
+          cv::Mat(features.height, features.width, CV_32FC1, const_cast<float*>(features.z.data()));
+    }
+    enforceConnectivity(result.labels, valid, density, run.min_size_fraction, depth,
+                        run.depth_jump_ratio);
   } else {
     std::vector<int> renumber(dalic.clusters().size(), -1);
     int next = 0;
@@ -114,7 +121,7 @@ Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   }
   return cluster(*b.dalic, b.features, b.density, radius,
                  {config_.seeding, config_.seed, config_.iterations, config_.enforce_connectivity,
-                  config_.min_size_fraction});
+                  config_.min_size_fraction, config_.depth_jump_ratio});
 }
 
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
@@ -169,7 +176,7 @@ Superpixels computeAspRgb(const cv::Mat& color, const AspConfig& config) {
   params.threads = config.threads;
   return cluster(features, density, params,
                  {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
-                  config.min_size_fraction});
+                  config.min_size_fraction, 0.0f});
 }
 
 Superpixels computeAspRgbd(const RgbdFrame& frame, const DaspConfig& config) {
@@ -182,7 +189,7 @@ Superpixels computeAspRgbd(const RgbdFrame& frame, const DaspConfig& config) {
       dalicParams(config, MetricKind::kColorDepth2D, radius, config.superpixel_count);
   return cluster(features, density, params,
                  {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
-                  config.min_size_fraction});
+                  config.min_size_fraction, 0.0f});
 }
 
 }  // namespace dasp

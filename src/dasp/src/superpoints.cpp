@@ -27,7 +27,7 @@ int findRoot(std::vector<int>& parent, int i) {
 }  // namespace
 
 int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
-                        double min_weight) {
+                        double min_weight, const cv::Mat& depth, float depth_jump_ratio) {
   if (labels.type() != CV_32SC1 || !labels.isContinuous()) {
     throw std::invalid_argument("enforceConnectivity: labels must be a continuous CV_32SC1");
   }
@@ -41,9 +41,24 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     throw std::invalid_argument(
         "enforceConnectivity: weight must be a continuous CV_32FC1 of the labels' size");
   }
+  if (!depth.empty() &&
+      (depth.type() != CV_32FC1 || depth.size() != labels.size() || !depth.isContinuous())) {
+    throw std::invalid_argument(
+        "enforceConnectivity: depth must be a continuous CV_32FC1 of the labels' size");
+  }
+  if (!depth.empty() && !(depth_jump_ratio > 0.0f)) {
+    throw std::invalid_argument("enforceConnectivity: depth_jump_ratio must be positive");
+  }
   const int width = labels.cols;
   const int height = labels.rows;
   int* label = labels.ptr<int>();
+  // Two neighbouring pixels are connected unless a depth jump lies between them.
+  const float* z = depth.empty() ? nullptr : depth.ptr<float>();
+  const auto connected = [z, depth_jump_ratio](std::size_t a, std::size_t b) {
+    if (z == nullptr) return true;
+    const float za = z[a], zb = z[b];
+    return std::abs(za - zb) <= depth_jump_ratio * std::min(za, zb);
+  };
   const std::uint8_t* ok = valid.empty() ? nullptr : valid.ptr<std::uint8_t>();
   const float* pixel_weight = weight.empty() ? nullptr : weight.ptr<float>();
 
@@ -67,7 +82,10 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
       }
       const int value = label[base + col];
       int end = col + 1;
-      while (end < width && (ok == nullptr || ok[base + end]) && label[base + end] == value) ++end;
+      while (end < width && (ok == nullptr || ok[base + end]) && label[base + end] == value &&
+             connected(base + end - 1, base + end)) {
+        ++end;
+      }
       const int id = static_cast<int>(runs.size());
       runs.push_back({row, col, end, value});
       std::fill(run_of_pixel.begin() + static_cast<std::ptrdiff_t>(base + col),
@@ -88,6 +106,15 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
       while (q < q_end && runs[q].end <= runs[r].begin) ++q;
       for (int p = q; p < q_end && runs[p].begin < runs[r].end; ++p) {
         if (runs[p].label != runs[r].label) continue;
+        if (z != nullptr) {
+          const std::size_t base = static_cast<std::size_t>(row) * width;
+          bool touching = false;
+          const int overlap_end = std::min(runs[p].end, runs[r].end);
+          for (int x = std::max(runs[p].begin, runs[r].begin); x < overlap_end && !touching; ++x) {
+            touching = connected(base + x - width, base + x);
+          }
+          if (!touching) continue;
+        }
         const int a = findRoot(parent, p), b = findRoot(parent, r);
         if (a != b) parent[std::max(a, b)] = std::min(a, b);
       }
@@ -158,7 +185,10 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   // Stray pieces join the resolved neighbour with the longest shared border; repeat while
   // pieces that only touch other stray pieces get resolved through them.
   std::vector<std::pair<int, int>> border;  // (label, border length)
-  const auto tally = [&](int c, std::size_t pixel) {
+  // Borders across a depth jump count only for pieces that have no other way to a label.
+  bool across_jumps = z == nullptr;
+  const auto tally = [&](int c, std::size_t from, std::size_t pixel) {
+    if (!across_jumps && !connected(from, pixel)) return;
     const int r = run_of_pixel[pixel];
     if (r < 0) return;
     const int other = component_of_run[r];
@@ -174,7 +204,8 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     }
   };
   bool changed = true;
-  while (changed) {
+  while (changed || !across_jumps) {
+    if (!changed) across_jumps = true;  // second round: pieces walled in by depth jumps
     changed = false;
     for (int c = 0; c < component_count; ++c) {
       if (final_label[c] != kUnresolved) continue;
@@ -182,11 +213,11 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
       for (int s = stray_start[c]; s < stray_start[c + 1]; ++s) {
         const Run& run = runs[stray_runs[s]];
         const std::size_t base = static_cast<std::size_t>(run.row) * width;
-        if (run.begin > 0) tally(c, base + run.begin - 1);
-        if (run.end < width) tally(c, base + run.end);
+        if (run.begin > 0) tally(c, base + run.begin, base + run.begin - 1);
+        if (run.end < width) tally(c, base + run.end - 1, base + run.end);
         for (int x = run.begin; x < run.end; ++x) {
-          if (run.row > 0) tally(c, base - width + x);
-          if (run.row + 1 < height) tally(c, base + width + x);
+          if (run.row > 0) tally(c, base + x, base - width + x);
+          if (run.row + 1 < height) tally(c, base + x, base + width + x);
         }
       }
       if (border.empty()) continue;

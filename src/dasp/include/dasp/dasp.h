@@ -63,8 +63,10 @@ struct DaspConfig {
   /// DALIC search window half-size as a multiple of the cluster's projected radius (C in alg. 3).
   float window_multiple = 1.5f;
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;
-  /// After the last iteration, every superpixel is made 4-connected (stray pieces join the
-  /// neighbour they share most border with). The thesis does not do this; users want it.
+  /// After the last iteration, every superpixel is made 4-connected on the surface (stray
+  /// pieces join the neighbour they share most border with; 4-neighbours across a depth jump of
+  /// more than depth_jump_ratio are not connected, so a superpixel never spans a depth
+  /// discontinuity). The thesis does not do this; users want it.
   bool enforce_connectivity = true;
   /// Superpixels smaller than this fraction of their expected pixel area are purged (merged
   /// into neighbours) during DALIC and replaced by splitting the heaviest ones (count mode).
@@ -75,8 +77,9 @@ struct DaspConfig {
   float max_slant_factor = 5.0f;
   /// Step h in pixels of the depth finite differences for normals (eq. 3.6, 3.7).
   int normal_step_px = 2;
-  /// Relative depth jump (|dD| / D) above which a finite-difference neighbour is treated as
-  /// lying across a depth discontinuity and the one-sided difference on the other side is used.
+  /// Relative depth jump (|dD| / D) above which two pixels lie across a depth discontinuity:
+  /// the normals use the one-sided difference on the other side, and connectivity enforcement
+  /// does not connect them.
   float depth_jump_ratio = 0.05f;
   std::uint64_t seed = 0;  ///< Seed of the random generator (sampling). Same seed, same output.
   int threads = 1;         ///< Worker threads: 1 = single-threaded, 0 = all cores (TBB).

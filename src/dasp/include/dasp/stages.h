@@ -176,8 +176,14 @@ class Dalic {
 /// else -1. Labels are renumbered 0..n-1 in order of first appearance. Returns n.
 /// valid: CV_8UC1 (non-zero = pixel may be labelled) or empty (all valid). weight: CV_32FC1
 /// (e.g. the density, so that min_weight is a fraction of a superpixel) or empty.
+/// depth: CV_32FC1 metres (0 = invalid) or empty. If given, connectivity is on the surface:
+/// 4-neighbours whose depths differ by more than depth_jump_ratio times the nearer depth are not
+/// connected, so a superpixel straddling a depth discontinuity is split and the piece behind
+/// the jump joins a superpixel on its own surface (a piece walled in by jumps on all sides joins
+/// across them).
 int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
-                        double min_weight);
+                        double min_weight, const cv::Mat& depth = cv::Mat(),
+                        float depth_jump_ratio = 0.05f);
 
 /// Superpoint fit: per label the mean colour, position and pixel position, plane-fit normal and
 /// eigenvalue shape properties (§3.2.3). labels CV_32SC1 with values -1..n-1.

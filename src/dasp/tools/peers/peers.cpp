@@ -16,6 +16,7 @@
 #include <map>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 namespace dasp {
 namespace peers {
@@ -92,7 +93,7 @@ cv::Mat computeOpenCvSeeds(const cv::Mat& bgr, const SeedsConfig& config) {
   return labels;
 }
 
-cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config) {
+cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_used) {
   const char* what = "computeVccs";
   checkColor(frame.color, config.superpixel_count, what);
   if (frame.depth.type() != CV_16UC1 || frame.depth.size() != frame.color.size()) {
@@ -141,31 +142,50 @@ cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config) {
         std::abs(features.nx[i]) + std::abs(features.ny[i]) + std::abs(features.nz[i]);
     seed_cells_m2 += features.area[i] * (l1 > 0.0 ? l1 : 1.0);
   }
-  const float seed_resolution =
-      config.seed_scale * static_cast<float>(std::sqrt(seed_cells_m2 / config.superpixel_count));
-  const float voxel_resolution = std::min(config.voxel_resolution_m, seed_resolution / 3.0f);
-  pcl::SupervoxelClustering<pcl::PointXYZRGBA> vccs(voxel_resolution, seed_resolution);
-  vccs.setUseSingleCameraTransform(config.single_camera_transform);
-  vccs.setInputCloud(cloud);
-  vccs.setColorImportance(config.color_importance);
-  vccs.setSpatialImportance(config.spatial_importance);
-  vccs.setNormalImportance(config.normal_importance);
-  std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZRGBA>::Ptr> clusters;
-  vccs.extract(clusters);
-  const pcl::PointCloud<pcl::PointXYZL>::Ptr labelled = vccs.getLabeledCloud();
-  if (labelled->size() != cloud->size()) {
-    throw std::runtime_error("computeVccs: PCL returned a labelled cloud of a different size");
-  }
-  cv::Mat labels(frame.color.size(), CV_32SC1, cv::Scalar(-1));
-  for (int y = 0; y < labels.rows; ++y) {
-    int* row = labels.ptr<int>(y);
-    for (int x = 0; x < labels.cols; ++x) {
-      const std::uint32_t label = (*labelled)[static_cast<std::size_t>(y) * labels.cols + x].label;
-      row[x] = label == 0 ? -1 : static_cast<int>(label);  // PCL: 0 = unlabelled
+  const auto run = [&](float seed_resolution) {
+    const float voxel_resolution = std::min(config.voxel_resolution_m, seed_resolution / 3.0f);
+    pcl::SupervoxelClustering<pcl::PointXYZRGBA> vccs(voxel_resolution, seed_resolution);
+    vccs.setUseSingleCameraTransform(config.single_camera_transform);
+    vccs.setInputCloud(cloud);
+    vccs.setColorImportance(config.color_importance);
+    vccs.setSpatialImportance(config.spatial_importance);
+    vccs.setNormalImportance(config.normal_importance);
+    std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZRGBA>::Ptr> clusters;
+    vccs.extract(clusters);
+    const pcl::PointCloud<pcl::PointXYZL>::Ptr labelled = vccs.getLabeledCloud();
+    if (labelled->size() != cloud->size()) {
+      throw std::runtime_error("computeVccs: PCL returned a labelled cloud of a different size");
     }
+    cv::Mat labels(frame.color.size(), CV_32SC1, cv::Scalar(-1));
+    for (int y = 0; y < labels.rows; ++y) {
+      int* row = labels.ptr<int>(y);
+      for (int x = 0; x < labels.cols; ++x) {
+        const std::uint32_t label =
+            (*labelled)[static_cast<std::size_t>(y) * labels.cols + x].label;
+        row[x] = label == 0 ? -1 : static_cast<int>(label);  // PCL: 0 = unlabelled
+      }
+    }
+    const int count = compactLabels(labels);
+    return std::make_pair(labels, count);
+  };
+  float seed_resolution =
+      config.seed_scale * static_cast<float>(std::sqrt(seed_cells_m2 / config.superpixel_count));
+  auto best = run(seed_resolution);
+  const int wanted = config.superpixel_count;
+  const auto error = [wanted](int count) { return std::abs(count - wanted); };
+  // Count matching: the supervoxel count goes about as 1 / s^2, so rescale s by
+  // sqrt(count / K) until the count is within count_tolerance of K (or the runs are used up).
+  auto current = best;
+  int attempt = 1;
+  for (; attempt < config.count_matching_runs &&
+         error(best.second) > config.count_tolerance * wanted && current.second > 0;
+       ++attempt) {
+    seed_resolution *= static_cast<float>(std::sqrt(static_cast<double>(current.second) / wanted));
+    current = run(seed_resolution);
+    if (error(current.second) < error(best.second)) best = current;
   }
-  compactLabels(labels);
-  return labels;
+  if (runs_used != nullptr) *runs_used = attempt;
+  return best.first;
 }
 
 }  // namespace peers

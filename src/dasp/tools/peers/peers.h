@@ -47,8 +47,15 @@ struct VccsConfig {
   float spatial_importance = 0.4f;
   float normal_importance = 1.0f;
   bool single_camera_transform = true;  ///< Depth-dependent voxel size for single-view clouds.
+  /// VCCS's count follows the seed grid only roughly (from 0.7 K to 1.4 K on the OSD frames), so
+  /// that methods are compared at the same number of superpixels the seed resolution is
+  /// rescaled by sqrt(count / K) and VCCS rerun, at most count_matching_runs runs in all, until
+  /// the count is within count_tolerance of K; the run closest to K is returned. 1 = no matching.
+  int count_matching_runs = 6;
+  float count_tolerance = 0.02f;
 };
-cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config);
+/// runs_used (optional): number of VCCS runs the count matching took.
+cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_used = nullptr);
 
 /// Renumbers labels >= 0 to 0..n-1 in order of first appearance; returns n.
 int compactLabels(cv::Mat& labels);
