@@ -140,6 +140,7 @@ class ParticleSet2D {
   std::vector<double> scratch_w_;
   std::vector<std::uint32_t> cell_;  // per particle: map cell of the current event
   std::vector<float> sum_;           // per particle: summed map values of the current batch
+  std::vector<float> noise_x_, noise_y_, noise_theta_;  // per particle: this step's normals
 };
 
 }  // namespace ebslam
