@@ -17,12 +17,12 @@ mkdir -p "${EVAL}/examples"
 SDASP="${BUILD}/dasp_sdasp"
 
 # Library defaults for s-DASP and s-SLIC.
-"${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/main.json" --methods sDASP,sSLIC
+"${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/main.json" --methods sDASP,sSLIC,sSLICvalid
 # Parameter grids on the same superpixels (how the defaults were chosen).
 "${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/grid_sdasp.json" --methods sDASP \
   --color-weight 2,4,8,16 --position-weight 1,2,4 --normal-weight 4,8,16 --eigenvectors 8,16,32 \
   --thresholds 101
-"${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/grid_sslic.json" --methods sSLIC \
+"${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/grid_sslic.json" --methods sSLIC,sSLICvalid \
   --color-weight 2,4,8,16,32,64 --eigenvectors 8,16,32 --thresholds 101
 # PCL LCCP with the example's parameters, three supervoxel sizes, without and with -tvoxel.
 "${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/lccp.json" --methods LCCP \
@@ -31,13 +31,14 @@ SDASP="${BUILD}/dasp_sdasp"
   --lccp-seed-resolutions 0.015,0.02,0.03 --lccp-single-camera-transform
 "${BUILD}/dasp_sdasp_bench" --benchmark_min_time=1 | tee "${EVAL}/bench.txt"
 
-# Example pictures at each method's ODS threshold, half size (s-SLIC with its best grid setting).
-read -r T_SDASP T_SSLIC C_SSLIC K_SSLIC < <(/usr/bin/python3 - "${EVAL}" <<'PY'
+# Example pictures at each method's ODS threshold, half size (s-SLIC: the best variant and setting of its grid).
+read -r T_SDASP T_SSLIC C_SSLIC K_SSLIC SP_SSLIC < <(/usr/bin/python3 - "${EVAL}" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1] + "/main.json"))["results"]
 g = max(json.load(open(sys.argv[1] + "/grid_sslic.json"))["results"], key=lambda r: r["ods"]["f1"])
 s = [r for r in d if r["method"] == "sDASP"][0]
-print(s["ods"]["threshold"], g["ods"]["threshold"], g["weight_color"], g["eigenvectors"])
+print(s["ods"]["threshold"], g["ods"]["threshold"], g["weight_color"], g["eigenvectors"],
+      g["superpixels"])
 PY
 )
 LCCP_ARGS=$(/usr/bin/python3 - "${EVAL}" <<'PY'
@@ -53,7 +54,7 @@ for f in "${EXAMPLES[@]}"; do
   C="${DATA}/${f}_rgb.png"; D="${DATA}/${f}_depth_mm.png"; O="${EVAL}/examples/${f}"
   "${SDASP}" segment --color "$C" --depth "$D" --threshold "${T_SDASP}" --picture-scale 0.5 \
     --segments "${O}_sdasp.png" --ucm "${O}_ucm.png" --superpixel-overlay "${O}_superpixels.png"
-  "${SDASP}" segment --color "$C" --depth "$D" --superpixels ASP_RGB --threshold "${T_SSLIC}" \
+  "${SDASP}" segment --color "$C" --depth "$D" --superpixels "${SP_SSLIC}" --threshold "${T_SSLIC}" \
     --color-weight "${C_SSLIC}" --eigenvectors "${K_SSLIC}" --picture-scale 0.5 \
     --segments "${O}_sslic.png"
   # shellcheck disable=SC2086

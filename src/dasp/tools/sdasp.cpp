@@ -38,9 +38,16 @@ double threadCpuMilliseconds() {
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
-// Superpixels for the segmentation: DASP (s-DASP) or colour-only ASP_RGB (s-SLIC).
+// Superpixels for the segmentation: DASP (s-DASP) or colour-only ASP_RGB (s-SLIC) over the whole
+// image, or ASP_RGB_VALID: ASP_RGB with the pixels without depth unlabelled, so that the graph
+// covers the same pixels as DASP's (the depth values themselves are still not used).
 dasp::Superpixels computeSuperpixels(const std::string& kind, const dasp::RgbdFrame& frame,
                                      int count, std::uint64_t seed) {
+  if (kind == "ASP_RGB_VALID") {
+    dasp::Superpixels sp = computeSuperpixels("ASP_RGB", frame, count, seed);
+    sp.labels.setTo(-1, frame.depth == 0);
+    return sp;
+  }
   if (kind == "DASP") {
     dasp::DaspConfig config;
     config.superpixel_count = count;
@@ -53,7 +60,7 @@ dasp::Superpixels computeSuperpixels(const std::string& kind, const dasp::RgbdFr
     config.seed = seed;
     return dasp::computeAspRgb(frame.color, config);
   }
-  throw std::invalid_argument("superpixels must be DASP or ASP_RGB, not " + kind);
+  throw std::invalid_argument("superpixels must be DASP, ASP_RGB or ASP_RGB_VALID, not " + kind);
 }
 
 cv::Vec3b segmentColor(int segment) {
@@ -78,7 +85,8 @@ cv::Mat segmentsPicture(const cv::Mat& segments) {
   return out;
 }
 
-// UCM as dark strokes on white: grey = 255 (1 - min(level, 1)); never-merged boundaries black.
+// UCM as dark strokes on white: grey = 255 (1 - sqrt(min(level, 1))), the square root so that the
+// weaker object boundaries (levels about 0.1) stay visible; never-merged boundaries black.
 cv::Mat ucmPicture(const cv::Mat& ucm) {
   cv::Mat out(ucm.size(), CV_8UC1, cv::Scalar(255));
   for (int y = 0; y < out.rows; ++y) {
@@ -86,7 +94,7 @@ cv::Mat ucmPicture(const cv::Mat& ucm) {
       const float level = ucm.at<float>(y, x);
       if (level < 0.0f) continue;
       out.at<std::uint8_t>(y, x) =
-          cv::saturate_cast<std::uint8_t>(255.0f * (1.0f - std::min(level, 1.0f)));
+          cv::saturate_cast<std::uint8_t>(255.0f * (1.0f - std::sqrt(std::min(level, 1.0f))));
     }
   }
   return out;
@@ -247,7 +255,7 @@ int main(int argc, char** argv) {
   dasp::RgbdFramePaths paths;
   dasp::Intrinsics intrinsics;
   std::string superpixels_kind = "DASP";
-  float threshold = 0.5f;
+  float threshold = config.threshold;
   std::string segments_path, ucm_path, labels_path, superpixels_path;
   segment->add_option("--color", paths.color, "8-bit colour PNG")
       ->required()
@@ -255,7 +263,9 @@ int main(int argc, char** argv) {
   segment->add_option("--depth", paths.depth, "16-bit depth PNG in millimetres")
       ->required()
       ->check(CLI::ExistingFile);
-  segment->add_option("--superpixels", superpixels_kind, "DASP (s-DASP) or ASP_RGB (s-SLIC)")
+  segment
+      ->add_option("--superpixels", superpixels_kind,
+                   "DASP (s-DASP), ASP_RGB (s-SLIC) or ASP_RGB_VALID")
       ->capture_default_str();
   segment
       ->add_option("-t,--threshold", threshold,
@@ -315,7 +325,9 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingDirectory);
   evaluate->add_option("--json", json_path, "output JSON with curves, ODS, OIS, times")->required();
-  evaluate->add_option("--methods", methods_text, "comma list of sDASP, sSLIC, LCCP")
+  evaluate
+      ->add_option("--methods", methods_text,
+                   "comma list of sDASP, sSLIC, sSLICvalid (ASP_RGB on depth-valid pixels), LCCP")
       ->capture_default_str();
   evaluate
       ->add_option("--thresholds", threshold_count,
@@ -458,9 +470,10 @@ int main(int argc, char** argv) {
         }
         continue;
       }
-      const std::string kind = method == "sDASP" ? "DASP"
-                               : method == "sSLIC"
-                                   ? "ASP_RGB"
+      const std::string kind = method == "sDASP"   ? "DASP"
+                               : method == "sSLIC" ? "ASP_RGB"
+                               : method == "sSLICvalid"
+                                   ? "ASP_RGB_VALID"
                                    : throw std::invalid_argument("unknown method " + method);
       std::vector<Curve> curves(grid.size());
       std::vector<std::vector<Times>> times(grid.size());
