@@ -216,6 +216,15 @@ void runStream(int frames, const std::string& csv_path) {
   std::printf("  last  %d frames: mean %.1f ms, median %.1f ms, p95 %.1f ms per frame\n", window,
               last.mean, last.median, last.p95);
   std::printf("  ratio last / first (mean): %.3f\n", last.mean / first.mean);
+  // Per block of 100 frames: the cost grows while the strand graph fills up to max_strands, then
+  // stays flat.
+  for (int begin = 0; begin + 100 <= frames; begin += 100) {
+    const Window block =
+        summarise(std::vector<double>(cpu_ms.begin() + begin, cpu_ms.begin() + begin + 100));
+    std::printf("  frames %4d-%4d: mean %.1f ms, median %.1f ms; strands at the end %d\n", begin,
+                begin + 99, block.mean, block.median,
+                strands[static_cast<std::size_t>(begin + 99)]);
+  }
   std::printf("  strands: %d after 100 frames, %d at the end (max over the stream %d)\n",
               strands[static_cast<std::size_t>(std::min(99, frames - 1))], strands.back(),
               *std::max_element(strands.begin(), strands.end()));
