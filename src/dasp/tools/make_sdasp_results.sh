@@ -29,7 +29,7 @@ SDASP="${BUILD}/dasp_sdasp"
   --lccp-seed-resolutions 0.015,0.02,0.03
 "${SDASP}" evaluate --folder "${DATA}" --json "${EVAL}/lccp_tvoxel.json" --methods LCCP \
   --lccp-seed-resolutions 0.015,0.02,0.03 --lccp-single-camera-transform
-"${BUILD}/dasp_sdasp_bench" --benchmark_min_time=1 | tee "${EVAL}/bench.txt"
+"${BUILD}/dasp_sdasp_bench" --benchmark_min_time=1 --benchmark_color=false | tee "${EVAL}/bench.txt"
 
 # Example pictures at each method's ODS threshold, half size (s-SLIC: the best variant and setting of its grid).
 read -r T_SDASP T_SSLIC C_SSLIC K_SSLIC SP_SSLIC < <(/usr/bin/python3 - "${EVAL}" <<'PY'
