@@ -13,6 +13,7 @@ cmake -S "$repo/src/ebslam" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev
 cmake --build "$build" -j2 --target ebslam_experiment_events2d ebslam_ebpf_bench
 "$build/ebslam_experiment_events2d" --data "$repo/../shared/data" --out "$runs" --seeds 3
 "$build/ebslam_ebpf_bench" --benchmark_filter='BM_Ebpf/|BM_Ebslam2d/B:./N:(5|10|25|50|75|100|250)$' \
-  --benchmark_min_time=0.5 --benchmark_out="$runs/bench.json" --benchmark_out_format=json
+  --benchmark_min_time=0.3 --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
+  --benchmark_out="$runs/bench.json" --benchmark_out_format=json
 /usr/bin/python3 "$repo/scripts/events2d_report.py" "$runs" --bench "$runs/bench.json" \
   --out "$repo/docs/results" --command "scripts/events2d_experiment.sh"

@@ -233,11 +233,17 @@ def main():
                "`ebslam_ebpf_bench`: synthetic ceiling run of about 180k events processed per "
                "iteration; rates from CPU time (release build with debug info, -O3 on the particle "
                "loops, baseline x86-64 SSE2, no -march). Thesis figures: table 6.3 (EB-PF, 2.53 GHz single "
-               "core) and table 7.1 (EB-SLAM-2D). The machine is shared by several jobs, so repeated "
-               "runs differ by up to about 30 %.", "",
+               "core) and table 7.1 (EB-SLAM-2D). Median of 3 repetitions; the machine is shared by "
+               "several jobs (load 5-9 on 2 cores while this was measured), single repetitions "
+               "differ by up to about 30 %.", "",
                "| filter | B | N | events/s | thesis events/s | ratio |", "|---|---|---|---|---|---|"]
         for b in bench["benchmarks"]:
-            name = b["name"]
+            # With repetitions, only the median of each benchmark is reported.
+            if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
+                continue
+            if b.get("run_type") == "iteration" and b.get("repetitions", 1) > 1:
+                continue
+            name = b.get("run_name", b["name"])
             parts = dict(p.split(":") for p in name.split("/")[1:] if ":" in p)
             kind = "EB-PF" if name.startswith("BM_Ebpf") else "EB-SLAM-2D"
             eps = b.get("events_per_s", b.get("items_per_second", 0))

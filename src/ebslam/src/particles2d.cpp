@@ -102,12 +102,17 @@ void ParticleSet2D::step(const std::uint32_t* pixel_index, int batch, const floa
   float* __restrict nx = noise_x_.data();
   float* __restrict ny = noise_y_.data();
   float* __restrict nt = noise_theta_.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    float g[4];
-    rng_.normals4(g);
+  for (std::size_t i = 0; i < n; i += 2) {
+    float g[6];
+    rng_.normals6(g);
     nx[i] = g[0];
     ny[i] = g[1];
     nt[i] = g[2];
+    if (i + 1 < n) {
+      nx[i + 1] = g[3];
+      ny[i + 1] = g[4];
+      nt[i + 1] = g[5];
+    }
   }
   for (std::size_t i = 0; i < n; ++i) {
     px[i] += sxy * nx[i];

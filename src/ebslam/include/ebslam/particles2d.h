@@ -53,9 +53,10 @@ struct GridMap2f {
   double inv_resolution_ = 0.0;
 };
 
-/// Fast standard-normal samples: xoshiro256++ picks entries of a table of 2^12 normal quantiles
-/// Phi^-1((i + 0.5) / 2^12), so each sample is one load from a 16 KB table that stays in L1
-/// cache (range about +-3.7 sigma; variance within 0.3 % of 1). Deterministic for a seed.
+/// Fast standard-normal samples: xoshiro256++ picks entries of a table of 2^10 normal quantiles
+/// Phi^-1((i + 0.5) / 2^10), so each sample is one load from a 4 KB table that stays in L1
+/// cache (range +-3.3 sigma; variance 0.9987). One 64-bit draw gives six samples (the diffusion
+/// of two particles). Deterministic for a seed.
 class FastNormalGenerator {
  public:
   explicit FastNormalGenerator(std::uint64_t seed);
@@ -73,7 +74,7 @@ class FastNormalGenerator {
   }
   /// Uniform in [0, 1).
   double uniform() { return static_cast<double>(nextU64() >> 11) * 0x1.0p-53; }
-  /// Four independent standard normals from one 64-bit draw (12 bits each).
+  /// Four independent standard normals from one 64-bit draw (10 of every 16 bits).
   void normals4(float out[4]) {
     const std::uint64_t r = nextU64();
     constexpr std::uint64_t mask = (std::uint64_t{1} << kTableBits) - 1;
@@ -82,7 +83,13 @@ class FastNormalGenerator {
     out[2] = table_[(r >> 32) & mask];
     out[3] = table_[(r >> 48) & mask];
   }
-  static constexpr int kTableBits = 12;
+  /// Six independent standard normals from one 64-bit draw (10 bits each).
+  void normals6(float out[6]) {
+    const std::uint64_t r = nextU64();
+    constexpr std::uint64_t mask = (std::uint64_t{1} << kTableBits) - 1;
+    for (int k = 0; k < 6; ++k) out[k] = table_[(r >> (10 * k)) & mask];
+  }
+  static constexpr int kTableBits = 10;
 
  private:
   static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
