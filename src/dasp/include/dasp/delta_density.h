@@ -25,9 +25,9 @@ struct DeltaDensityConfig {
   /// literal Delta rho of alg. 5 has positive and negative ripples of about one superpixel size
   /// even where the density did not change, and every ripple makes SPDS remove or add points.
   /// Smoothing at the superpixel scale cancels the ripples and keeps real changes (which span
-  /// several superpixels). 0 = the literal alg. 5 (not in the thesis: added for stability). On a
-  /// constant density re-sampled from its own SPDS points, the share of points removed or added
-  /// falls from 39% (0, literal) to 17% (1), 8% (2) and 5% (3) (docs/results/tdasp.md).
+  /// several superpixels). 0 = the literal alg. 5 (not in the thesis: added for stability). On
+  /// real DASP densities re-sampled from their own SPDS points, the share of points removed or
+  /// added falls from 44% (0, literal) to 15% (1), 7% (2) and 4% (3) (docs/results/tdasp.md).
   float smoothing_radius_multiple = 2.0f;
 };
 
