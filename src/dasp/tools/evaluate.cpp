@@ -78,6 +78,8 @@ int main(int argc, char** argv) {
   app.add_option("--iterations", options.iterations, "DALIC iterations (DASP family)")
       ->capture_default_str();
   app.add_option("--seed", options.seed, "random seed (DASP family)")->capture_default_str();
+  app.add_option("--max-slant-factor", options.max_slant_factor,
+                 "DASP density clamp of the slant factor (DaspConfig::max_slant_factor)");
   app.add_option("--vccs-seed-scale", options.vccs_seed_scale,
                  "VCCS seed resolution scale (see peers.h)")
       ->capture_default_str();

@@ -12,6 +12,7 @@ import csv
 import datetime
 import json
 import os
+import re
 import subprocess
 
 import matplotlib
@@ -138,6 +139,8 @@ def main():
                         help="command line to quote in the report")
     parser.add_argument("--source", default=None,
                         help="which code produced the numbers (default: the git HEAD commit)")
+    parser.add_argument("--bench", default=None,
+                        help="console output of dasp_dasp_bench to include as the speed section")
     parser.add_argument("folders", nargs="+")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -158,13 +161,18 @@ def main():
               "640x480; mask = object label > 0 and depth > 0; every method gets the same frames, "
               "mask and requested K; DASP, ASP_RGB and ASP_RGBD run 5 DALIC iterations, seed 0; "
               "OpenCV SLIC 10 iterations (region size round(sqrt(640*480/K)), ruler 10, CIELab); "
-              "SEEDS 4 levels, 4 iterations; PCL VCCS with seed resolution sqrt(surface/K).\n")
+              "SEEDS 4 levels, 4 iterations; PCL VCCS (PCL tutorial weights) with its seed "
+              "resolution rescaled per frame until it delivers K within 2 % (at most 6 runs; "
+              "the time is per run). DASP enforces connectivity on the surface (no superpixel "
+              "spans a depth jump of more than 5 %).\n")
     md.append("## K = 1000, the columns of the issue's anchor table\n")
     md.append("Means over all frames. Rec = boundary recall at 2 px (normalised by the "
               "ground-truth boundary), UE = Neubert-Protzel undersegmentation error, ASA = "
               "achievable segmentation accuracy, CE depth = depth compression error, CO = "
-              "isoperimetric compactness (thesis eq. A.6/A.7). Time = wall time of the method "
-              "call per frame, one core, measured while other jobs shared the 2-core machine.\n")
+              "isoperimetric compactness (thesis eq. A.6/A.7). Time = CPU time of the method "
+              "call per frame on one core (one-shot call: allocations included), measured while "
+              "other jobs shared the 2-core machine; the benchmark below compares speed properly."
+              "\n")
     md.append("| method | superpixels delivered (K = 1000) | superpixels in mask | Rec | UE | ASA "
               "| CE depth | CO | time per frame |")
     md.append("|---|---|---|---|---|---|---|---|---|")
@@ -230,9 +238,23 @@ def main():
         "the 3D surface, not in the image, so its 2D UDE is expected to be higher.\n"
         "- Delivered = superpixels (labels >= 0) in the whole label image; in mask = those with a "
         "pixel inside the mask. DASP and ASP_RGBD label only pixels with depth.\n")
+    if args.bench and os.path.exists(args.bench):
+        md.append("## Speed: dasp_dasp_bench (Google Benchmark), same frame, same run\n")
+        md.append("640x480 frame learn0, K = 1000, 5 iterations; OpenCV ximgproc SLIC 10 iterations "
+                  "on the same frame in the same run (region size 18, about 970 superpixels). "
+                  "Medians of 3 repetitions; CPU is the process CPU time, Time the wall time (the "
+                  "2-core machine was shared, so wall times are inflated; compare the ratios). "
+                  "BM_Dasp is the one-shot computeDasp call, BM_DaspStream a DaspSegmenter that keeps "
+                  "its per-pixel buffers from frame to frame (same result); DaspPixels scales the "
+                  "frame (K with it), DaspCount varies K on the full frame.\n")
+        lines = [re.sub(r"\x1b\[[0-9;]*m", "", line.rstrip())
+                 for line in open(args.bench, encoding="utf-8")]
+        keep = [line for line in lines if "_median" in line or line.startswith("ratio")
+                or line.startswith("peak memory") or line.startswith("Benchmark")]
+        md.append("```\n" + "\n".join(keep) + "\n```\n")
     md.append("## How to regenerate\n")
     md.append("```\nsrc/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
-              "builds `dasp_evaluate` (RelWithDebInfo) in `build_dir` (default "
+              "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, PCL VCCS in a second), frames in "
               "parallel (JOBS, default 2) with every method single-threaded, and calls this "

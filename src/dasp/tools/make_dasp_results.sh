@@ -12,13 +12,17 @@ JOBS="${JOBS:-2}"
 read -r -a KS <<< "${KS:-250 500 1000 2000}"
 
 cmake -S "${REPO}/src/dasp" -B "${BUILD}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=OFF \
-  -DDASP_BUILD_BENCHMARKS=OFF > "${BUILD}.configure.log"
-cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate
+  > "${BUILD}.configure.log"
+cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate dasp_dasp_bench
 mkdir -p "${BUILD}/eval"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/main" \
   --methods DASP ASP_RGB ASP_RGBD SLIC SEEDS -k "${KS[@]}" -j "${JOBS}"
 # PCL supervoxels are the slowest method: one separate pass per K.
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
   --methods VCCS -k "${KS[@]}" -j "${JOBS}"
+# Speed: every stage, DASP against OpenCV SLIC on the same frame in the same run.
+DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true --benchmark_min_time=0.2 > "${BUILD}/bench.txt"
 /usr/bin/python3 "${REPO}/src/dasp/tools/make_dasp_results.py" --out "${REPO}/docs/results" \
+  --bench "${BUILD}/bench.txt" \
   --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs"

@@ -72,6 +72,7 @@ MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOption
       config.iterations = options.iterations;
       config.seed = options.seed;
       config.threads = options.threads;
+      config.max_slant_factor = options.max_slant_factor;
       Superpixels s =
           method == Method::kDasp ? computeDasp(frame, config) : computeAspRgbd(frame, config);
       result.labels = std::move(s.labels);

@@ -30,7 +30,8 @@ struct MethodOptions {
   int slic_iterations = 10;     ///< OpenCV SLIC iterations (OpenCV default).
   std::uint64_t seed = 0;       ///< Random seed of the DASP family.
   int threads = 1;              ///< Threads inside DASP / ASP (1 = single core, 0 = all).
-  float vccs_seed_scale = VccsConfig{}.seed_scale;  ///< See VccsConfig::seed_scale.
+  float vccs_seed_scale = VccsConfig{}.seed_scale;         ///< See VccsConfig::seed_scale.
+  float max_slant_factor = DaspConfig{}.max_slant_factor;  ///< DASP density clamp (dasp.h).
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
