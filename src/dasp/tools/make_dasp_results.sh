@@ -12,7 +12,7 @@ JOBS="${JOBS:-2}"
 read -r -a KS <<< "${KS:-250 500 1000 2000}"
 
 cmake -S "${REPO}/src/dasp" -B "${BUILD}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=OFF \
-  > "${BUILD}.configure.log"
+  -DDASP_BUILD_BENCHMARKS=ON > "${BUILD}.configure.log"
 cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate dasp_dasp_bench
 mkdir -p "${BUILD}/eval"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/main" \
