@@ -224,7 +224,9 @@ def main():
                 ok = [r for r in sel if r["failed"] == "0"]
                 pos = np.sqrt(np.mean([float(r["rmse_pos_m"]) ** 2 for r in ok])) * 100 if ok else float("nan")
                 rot = np.sqrt(np.mean([float(r["rmse_rot_deg"]) ** 2 for r in ok])) if ok else float("nan")
-                md.append(f"| {g:g} | {len(sel)} | {pos:.2f} cm | {rot:.2f} deg | {len(sel) - len(ok)}/{len(sel)} |")
+                pos_text = "-" if np.isnan(pos) else f"{pos:.2f} cm"
+                rot_text = "-" if np.isnan(rot) else f"{rot:.2f} deg"
+                md.append(f"| {g:g} | {len(sel)} | {pos_text} | {rot_text} | {len(sel) - len(ok)}/{len(sel)} |")
             md.append("")
 
     if a.bench and os.path.exists(a.bench):

@@ -41,8 +41,9 @@ struct EventFilterConfig {
   /// simulated sensor (contrast threshold 0.15, lines at about four thresholds of contrast)
   /// fires about 5000 events per pixel of motion on this ceiling, so the motion per event is far
   /// below W_trig / 250 and what matters is the event rate per second against the robot speed
-  /// (up to 0.5 m/s, 1 rad/s in pioneer_360): with G0 = 250 the headings diffuse by 1 mrad per
-  /// K = 100 events while the robot turns by up to 2.5 mrad. The sensor and event rate of the
+  /// (about 40k events/s; up to 0.5-0.8 m/s and 0.7-1.2 rad/s on these runs): with G0 = 250 the
+  /// headings diffuse by 0.9 mrad per K = 100 events (2.5 ms) while the robot turns by up to
+  /// 3 mrad. The sensor and event rate of the
   /// thesis' simulation are not given; G0 is a property of scene and sensor and is set per setup
   /// (or estimated online, adapt_g0).
   double g0 = 60.0;
