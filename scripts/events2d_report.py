@@ -102,7 +102,8 @@ def main():
           "its position RMSE exceeds 30 cm. Events per second are single-threaded processing "
           "rates measured inside the experiment on a shared machine (load 5-9 on 2 cores while "
           "this was generated, so they are low; the benchmark below measures CPU time).", "",
-          "Parameters (defaults of ebslam_experiment_events2d and of the Config structs): EB-PF "
+          "Parameters (defaults of ebslam_experiment_events2d; G0 as in the Config structs, whose "
+          "K = 100 and zero latency compensation stay the thesis' values): EB-PF "
           "N = 50, B = 3, beta = 0.95, gamma = 0.5, G0 = 60, K in {25, 100}, latency "
           "compensation 20 ms; EB-SLAM-2D B = 3, K = 100, beta = 0.95, G0 = 30, 3 cm cells, "
           "splat sigma 1.5 cm, Z update every pixel of image motion of p_*, Z0 = 1. G0 (the "
