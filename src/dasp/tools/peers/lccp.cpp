@@ -6,53 +6,20 @@
 #include <pcl/segmentation/supervoxel_clustering.h>
 
 #include <cmath>
-#include <cstdint>
-#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
 
+#include "peers/pcl_cloud.h"
 #include "peers/peers.h"
 
 namespace dasp {
 namespace peers {
 
 cv::Mat computeLccp(const RgbdFrame& frame, const LccpConfig& config, int* supervoxel_count) {
-  if (frame.color.type() != CV_8UC3 || frame.depth.type() != CV_16UC1 ||
-      frame.depth.size() != frame.color.size()) {
-    throw std::invalid_argument(
-        "computeLccp: colour CV_8UC3 and depth CV_16UC1 (mm) of the same size required");
-  }
-  const Intrinsics& k = frame.intrinsics;
-  if (!(k.fx > 0.0f && k.fy > 0.0f) || !std::isfinite(k.cx) || !std::isfinite(k.cy)) {
-    throw std::invalid_argument("computeLccp: intrinsics must have positive focal lengths");
-  }
+  const auto cloud = organizedCloud(frame, "computeLccp");
   if (!(config.voxel_resolution_m > 0.0f && config.seed_resolution_m > 0.0f)) {
     throw std::invalid_argument("computeLccp: voxel and seed resolution must be > 0");
-  }
-  // Organized cloud, NaN where depth is missing, so that point index = pixel index.
-  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZRGBA>>(
-      static_cast<std::uint32_t>(frame.color.cols), static_cast<std::uint32_t>(frame.color.rows));
-  cloud->is_dense = false;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (int y = 0; y < frame.color.rows; ++y) {
-    const std::uint16_t* depth = frame.depth.ptr<std::uint16_t>(y);
-    const cv::Vec3b* color = frame.color.ptr<cv::Vec3b>(y);
-    for (int x = 0; x < frame.color.cols; ++x) {
-      pcl::PointXYZRGBA& p = cloud->at(x, y);
-      p.b = color[x][0];
-      p.g = color[x][1];
-      p.r = color[x][2];
-      p.a = 255;
-      if (depth[x] == 0) {
-        p.x = p.y = p.z = nan;
-        continue;
-      }
-      const float z = 0.001f * depth[x];
-      p.x = (x - k.cx) * z / k.fx;
-      p.y = (y - k.cy) * z / k.fy;
-      p.z = z;
-    }
   }
   pcl::SupervoxelClustering<pcl::PointXYZRGBA> vccs(config.voxel_resolution_m,
                                                     config.seed_resolution_m);

@@ -1,5 +1,7 @@
 #include "peers/peers.h"
 
+#include "peers/pcl_cloud.h"
+
 #include "dasp/stages.h"
 
 #include <opencv2/imgproc.hpp>
@@ -14,7 +16,9 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <utility>
 
@@ -93,21 +97,18 @@ cv::Mat computeOpenCvSeeds(const cv::Mat& bgr, const SeedsConfig& config) {
   return labels;
 }
 
-cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_used) {
-  const char* what = "computeVccs";
-  checkColor(frame.color, config.superpixel_count, what);
-  if (frame.depth.type() != CV_16UC1 || frame.depth.size() != frame.color.size()) {
+std::shared_ptr<pcl::PointCloud<pcl::PointXYZRGBA>> organizedCloud(const RgbdFrame& frame,
+                                                                   const char* what) {
+  if (frame.color.type() != CV_8UC3 || frame.depth.type() != CV_16UC1 ||
+      frame.depth.size() != frame.color.size()) {
     throw std::invalid_argument(
-        "computeVccs: depth must be CV_16UC1 millimetres of the colour image's size");
+        std::string(what) + ": colour CV_8UC3 and depth CV_16UC1 (mm) of the same size required");
   }
   const Intrinsics& k = frame.intrinsics;
   if (!(k.fx > 0.0f && k.fy > 0.0f) || !std::isfinite(k.cx) || !std::isfinite(k.cy)) {
-    throw std::invalid_argument("computeVccs: intrinsics must have positive focal lengths");
+    throw std::invalid_argument(std::string(what) +
+                                ": intrinsics must have positive focal lengths");
   }
-  if (!(config.seed_scale > 0.0f && config.voxel_resolution_m > 0.0f)) {
-    throw std::invalid_argument("computeVccs: seed_scale and voxel_resolution_m must be > 0");
-  }
-  // Organized cloud, NaN where depth is missing, so that point index = pixel index.
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZRGBA>>(
       static_cast<std::uint32_t>(frame.color.cols), static_cast<std::uint32_t>(frame.color.rows));
   cloud->is_dense = false;
@@ -130,6 +131,16 @@ cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_
       p.y = (y - k.cy) * z / k.fy;
       p.z = z;
     }
+  }
+  return cloud;
+}
+
+cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_used) {
+  const char* what = "computeVccs";
+  checkColor(frame.color, config.superpixel_count, what);
+  const auto cloud = organizedCloud(frame, what);
+  if (!(config.seed_scale > 0.0f && config.voxel_resolution_m > 0.0f)) {
+    throw std::invalid_argument("computeVccs: seed_scale and voxel_resolution_m must be > 0");
   }
   // VCCS seeds one supervoxel per occupied cell of a cubic grid of the seed resolution s. A
   // surface patch of area A with unit normal n cuts about A (|n_x| + |n_y| + |n_z|) / s^2 cells,
