@@ -30,6 +30,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench_frame.h"
 #include "dasp/delta_density.h"
 #include "dasp/segmentation.h"
 #include "dasp/stages.h"
@@ -42,29 +43,8 @@ using namespace dasp;
 constexpr int kCount = 1000;
 constexpr double kPi = 3.14159265358979323846;
 
-RgbdFrame loadFrame() {
-  namespace fs = std::filesystem;
-  fs::path folder = fs::path(__FILE__).parent_path() / "../../../../shared/data/osd/learn";
-  if (const char* env = std::getenv("DASP_BENCH_FRAME_DIR")) folder = env;
-  RgbdFrame frame;
-  frame.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f};
-  if (fs::exists(folder / "learn0_rgb.png")) {
-    frame.color = cv::imread((folder / "learn0_rgb.png").string(), cv::IMREAD_COLOR);
-    frame.depth = cv::imread((folder / "learn0_depth_mm.png").string(), cv::IMREAD_UNCHANGED);
-    std::printf("frame: %s/learn0\n", folder.string().c_str());
-    return frame;
-  }
-  std::printf("frame: synthetic (no data at %s)\n", folder.string().c_str());
-  frame.color = cv::Mat(480, 640, CV_8UC3);
-  cv::randu(frame.color, cv::Scalar::all(0), cv::Scalar::all(255));
-  cv::GaussianBlur(frame.color, frame.color, cv::Size(0, 0), 4.0);
-  frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(2000));
-  frame.depth(cv::Rect(160, 120, 320, 240)).setTo(1200);
-  return frame;
-}
-
 const RgbdFrame& baseFrame() {
-  static const RgbdFrame f = loadFrame();
+  static const RgbdFrame f = bench::loadBenchFrame();
   return f;
 }
 

@@ -1,0 +1,37 @@
+// The frame every dasp benchmark runs on: learn0 of ../shared/data/osd/learn (or of
+// $DASP_BENCH_FRAME_DIR), else a synthetic textured two-plane scene of the same size (640x480).
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dasp/dasp.h"
+
+namespace dasp::bench {
+
+inline RgbdFrame loadBenchFrame() {
+  namespace fs = std::filesystem;
+  fs::path folder = fs::path(__FILE__).parent_path() / "../../../../shared/data/osd/learn";
+  if (const char* env = std::getenv("DASP_BENCH_FRAME_DIR")) folder = env;
+  RgbdFrame frame;
+  frame.intrinsics = {525.0f, 525.0f, 319.5f, 239.5f};
+  if (fs::exists(folder / "learn0_rgb.png")) {
+    frame.color = cv::imread((folder / "learn0_rgb.png").string(), cv::IMREAD_COLOR);
+    frame.depth = cv::imread((folder / "learn0_depth_mm.png").string(), cv::IMREAD_UNCHANGED);
+    std::printf("frame: %s/learn0\n", folder.string().c_str());
+    return frame;
+  }
+  std::printf("frame: synthetic (no data at %s)\n", folder.string().c_str());
+  frame.color = cv::Mat(480, 640, CV_8UC3);
+  cv::randu(frame.color, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::GaussianBlur(frame.color, frame.color, cv::Size(0, 0), 4.0);
+  frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(2000));
+  frame.depth(cv::Rect(160, 120, 320, 240)).setTo(1200);
+  return frame;
+}
+
+}  // namespace dasp::bench
