@@ -209,13 +209,16 @@ BENCHMARK(BM_DaspCount)
     ->Arg(4000)
     ->Unit(benchmark::kMillisecond);
 
-// Records the mean real time per run name, to print the DASP / SLIC ratio at the end.
+// Records the real time per run name (the median when repeated), to print the DASP / SLIC ratios
+// at the end.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
       if (run.run_type == Run::RT_Iteration && run.iterations > 0) {
         times_ms[run.benchmark_name()] = run.GetAdjustedRealTime();
+      } else if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
+        times_ms[run.run_name.str()] = run.GetAdjustedRealTime();  // with --benchmark_repetitions
       }
     }
     ConsoleReporter::ReportRuns(runs);
