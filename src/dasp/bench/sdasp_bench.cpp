@@ -72,7 +72,8 @@ BENCHMARK(BM_SdaspEigenSolve)->Unit(benchmark::kMillisecond);
 
 // Union-find labelling of the graph and the pixel segment image at the default threshold.
 void BM_SdaspLabelling(benchmark::State& state) {
-  const float threshold = SdaspConfig{}.threshold;
+  const SdaspConfig defaults;
+  const float threshold = defaults.threshold;
   std::size_t segments = 0;
   for (auto _ : state) {
     const std::vector<int> nodes = segmentGraph(contourGraph(), threshold);
