@@ -42,13 +42,17 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth/image", 2);
     color_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("rgb/camera_info", 2);
     depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth/camera_info", 2);
-    NODELET_INFO("publishing %zu frames from '%s' at %.1f Hz%s", frames_.size(),
-                 config_.folder.c_str(), config_.rate_hz, config_.loop ? " in a loop" : "");
+    NODELET_INFO("publishing %zu frames from '%s' at %.1f Hz%s%s", frames_.size(),
+                 config_.folder.c_str(), config_.rate_hz, config_.loop ? " in a loop" : "",
+                 config_.wait_for_subscribers ? " once a subscriber connects" : "");
     timer_ = nh.createWallTimer(ros::WallDuration(1.0 / config_.rate_hz),
                                 &RgbdFolderSourceNodelet::publishNext, this);
   }
 
   void publishNext(const ros::WallTimerEvent&) {
+    if (published_ == 0 && failed_ == 0 && config_.wait_for_subscribers && !subscriberSettled()) {
+      return;
+    }
     if (next_ >= frames_.size()) {
       if (!config_.loop) {
         NODELET_INFO("published all %zu frames (%zu unreadable)", frames_.size(), failed_);
@@ -78,7 +82,20 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     depth_pub_.publish(toDepthImageMsg(frame.depth, header));
   }
 
+  // roscpp counts a subscriber before its side of the connection is ready, and messages sent in
+  // that window are lost; so the first frame goes out once a subscriber has been there 0.5 s.
+  bool subscriberSettled() {
+    if (color_pub_.getNumSubscribers() == 0) {
+      subscriber_seen_ = ros::WallTime();
+      return false;
+    }
+    const ros::WallTime now = ros::WallTime::now();
+    if (subscriber_seen_.isZero()) subscriber_seen_ = now;
+    return (now - subscriber_seen_).toSec() >= 0.5;
+  }
+
   RgbdFolderSourceConfig config_;
+  ros::WallTime subscriber_seen_;
   std::vector<dasp::RgbdFramePaths> frames_;
   std::size_t next_ = 0;
   std::size_t published_ = 0;

@@ -27,6 +27,8 @@ RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& nh) {
   config.folder = param<std::string>(nh, "folder", config.folder);
   config.rate_hz = param<double>(nh, "rate", config.rate_hz);
   config.loop = param<bool>(nh, "loop", config.loop);
+  config.wait_for_subscribers =
+      param<bool>(nh, "wait_for_subscribers", config.wait_for_subscribers);
   config.frame_id = param<std::string>(nh, "frame_id", config.frame_id);
   config.intrinsics.fx = static_cast<float>(param<double>(nh, "fx", config.intrinsics.fx));
   config.intrinsics.fy = static_cast<float>(param<double>(nh, "fy", config.intrinsics.fy));
