@@ -14,7 +14,6 @@
 #include "dasp/spectral.h"
 #include "dasp/superpixel_graph.h"
 #include "dasp_synthetic.h"
-#include "peers/lccp.h"
 
 namespace dasp {
 namespace {
@@ -309,35 +308,6 @@ TEST(Sdasp, TwoObjectsGiveTwoSegments) {
   EXPECT_GT(left_share, 0.97);
   EXPECT_GT(right_share, 0.97);
   EXPECT_EQ(metrics::countSegments(segments, cv::Mat()), 2u);
-}
-
-}  // namespace
-}  // namespace dasp
-
-namespace dasp {
-namespace {
-
-TEST(LccpPeer, SeparatesTwoBoxesAtDifferentDepths) {
-  // Two fronto-parallel boxes with a 40 cm depth step between them: LCCP must cut the step.
-  const int width = 160, height = 120;
-  RgbdFrame frame;
-  frame.color = test::flatColor(width, height);
-  frame.intrinsics = test::syntheticIntrinsics(width, height);
-  frame.depth = cv::Mat(height, width, CV_16UC1, cv::Scalar(0));
-  frame.depth(cv::Rect(20, 20, 60, 80)).setTo(cv::Scalar(900));
-  frame.depth(cv::Rect(80, 20, 60, 80)).setTo(cv::Scalar(1300));
-  int supervoxels = 0;
-  const cv::Mat labels = peers::computeLccp(frame, peers::LccpConfig{}, &supervoxels);
-  ASSERT_EQ(labels.type(), CV_32SC1);
-  EXPECT_GT(supervoxels, 2);
-  EXPECT_EQ(labels.at<int>(0, 0), -1);  // no depth, no label
-  const int left = labels.at<int>(60, 50);
-  const int right = labels.at<int>(60, 110);
-  EXPECT_GE(left, 0);
-  EXPECT_GE(right, 0);
-  EXPECT_NE(left, right);
-  frame.depth = cv::Mat();
-  EXPECT_THROW(peers::computeLccp(frame, peers::LccpConfig{}), std::invalid_argument);
 }
 
 }  // namespace
