@@ -28,7 +28,6 @@ namespace {
 using namespace dasp;
 
 constexpr int kCount = 1000;
-constexpr int kSlicRegionSize = 18;  // 640x480 / 18^2 = 948 grid cells; SLIC returns about 970
 
 const RgbdFrame& frame() {
   static const RgbdFrame f = bench::loadBenchFrame();
@@ -125,15 +124,7 @@ void BM_OpenCvSlic(benchmark::State& state) {
   const int previous = cv::getNumThreads();
   cv::setNumThreads(1);
   int count = 0;
-  for (auto _ : state) {
-    cv::Mat lab;
-    cv::cvtColor(frame().color, lab, cv::COLOR_BGR2Lab);
-    auto slic = cv::ximgproc::createSuperpixelSLIC(lab, cv::ximgproc::SLIC, kSlicRegionSize);
-    slic->iterate(10);
-    cv::Mat labels;
-    slic->getLabels(labels);
-    count = slic->getNumberOfSuperpixels();
-  }
+  for (auto _ : state) count = bench::runOpenCvSlic(frame().color);
   cv::setNumThreads(previous);
   state.counters["superpixels"] = count;
 }
