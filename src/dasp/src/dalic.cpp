@@ -11,6 +11,7 @@
 
 #include "dasp/stages.h"
 #include "parallel.h"
+#include "point_moments.h"
 
 namespace dasp {
 namespace {
@@ -360,30 +361,18 @@ void Dalic::update() {
               a[kSb] += sb;
               a[kMass] += mass;
               if (depth) {
-                const float cx = c.position.x(), cy = c.position.y(), cz = c.position.z();
-                float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
-                for (int x = col; x < end; ++x) {
-                  const std::size_t i = base + x;
-                  const float dx = f.x[i] - cx, dy = f.y[i] - cy, dz = f.z[i] - cz;
-                  sx += dx;
-                  sy += dy;
-                  sz += dz;
-                  sxx += dx * dx;
-                  sxy += dx * dy;
-                  sxz += dx * dz;
-                  syy += dy * dy;
-                  syz += dy * dz;
-                  szz += dz * dz;
-                }
-                a[kSx] += sx;
-                a[kSy] += sy;
-                a[kSz] += sz;
-                a[kSxx] += sxx;
-                a[kSxy] += sxy;
-                a[kSxz] += sxz;
-                a[kSyy] += syy;
-                a[kSyz] += syz;
-                a[kSzz] += szz;
+                const detail::PointMoments m = detail::sumPointMoments(
+                    f.x.data() + base, f.y.data() + base, f.z.data() + base, col, end,
+                    c.position.x(), c.position.y(), c.position.z());
+                a[kSx] += m.sx;
+                a[kSy] += m.sy;
+                a[kSz] += m.sz;
+                a[kSxx] += m.sxx;
+                a[kSxy] += m.sxy;
+                a[kSxz] += m.sxz;
+                a[kSyy] += m.syy;
+                a[kSyz] += m.syz;
+                a[kSzz] += m.szz;
               }
             }
             col = end;

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "dasp/stages.h"
+#include "point_moments.h"
 
 namespace dasp {
 namespace {
@@ -309,27 +310,18 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
           const float rx = static_cast<float>(s.reference.x());
           const float ry = static_cast<float>(s.reference.y());
           const float rz = static_cast<float>(s.reference.z());
-          float sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+          const detail::PointMoments m =
+              detail::sumPointMoments(features.x.data() + base, features.y.data() + base,
+                                      features.z.data() + base, col, end, rx, ry, rz);
           float snx = 0, sny = 0, snz = 0;
           for (int x = col; x < end; ++x) {
-            const std::size_t i = base + x;
-            const float dx = features.x[i] - rx, dy = features.y[i] - ry, dz = features.z[i] - rz;
-            sx += dx;
-            sy += dy;
-            sz += dz;
-            sxx += dx * dx;
-            sxy += dx * dy;
-            sxz += dx * dz;
-            syy += dy * dy;
-            syz += dy * dz;
-            szz += dz * dz;
-            snx += features.nx[i];
-            sny += features.ny[i];
-            snz += features.nz[i];
+            snx += features.nx[base + x];
+            sny += features.ny[base + x];
+            snz += features.nz[base + x];
           }
-          s.position += Eigen::Vector3d(sx, sy, sz);
+          s.position += Eigen::Vector3d(m.sx, m.sy, m.sz);
           Eigen::Matrix3d scatter;
-          scatter << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+          scatter << m.sxx, m.sxy, m.sxz, m.sxy, m.syy, m.syz, m.sxz, m.syz, m.szz;
           s.scatter += scatter;
           s.normal += Eigen::Vector3d(snx, sny, snz);
         }

@@ -43,6 +43,20 @@ inline RgbdFrame twoPlanes(int width, int height, float near_m, float far_m, cv:
   return frame;
 }
 
+/// Two same-grey boxes side by side, 160x120: the left at 0.9 m, the right at 1.3 m (a 40 cm depth
+/// step at column 80), no valid depth around them. Left box columns 20-79, right 80-139, rows
+/// 20-99.
+inline RgbdFrame twoBoxes() {
+  const int width = 160, height = 120;
+  RgbdFrame frame;
+  frame.color = flatColor(width, height);
+  frame.intrinsics = syntheticIntrinsics(width, height);
+  frame.depth = cv::Mat(height, width, CV_16UC1, cv::Scalar(0));
+  frame.depth(cv::Rect(20, 20, 60, 80)).setTo(cv::Scalar(900));
+  frame.depth(cv::Rect(80, 20, 60, 80)).setTo(cv::Scalar(1300));
+  return frame;
+}
+
 /// A plane rotated by `angle_rad` about the camera's y axis through (0, 0, centre_m), float
 /// depth in metres (no quantisation).
 inline RgbdFrame slantedPlane(int width, int height, float centre_m, float angle_rad) {

@@ -14,13 +14,7 @@ namespace {
 
 TEST(LccpPeer, SeparatesTwoBoxesAtDifferentDepths) {
   // Two fronto-parallel boxes with a 40 cm depth step between them: LCCP must cut the step.
-  const int width = 160, height = 120;
-  RgbdFrame frame;
-  frame.color = test::flatColor(width, height);
-  frame.intrinsics = test::syntheticIntrinsics(width, height);
-  frame.depth = cv::Mat(height, width, CV_16UC1, cv::Scalar(0));
-  frame.depth(cv::Rect(20, 20, 60, 80)).setTo(cv::Scalar(900));
-  frame.depth(cv::Rect(80, 20, 60, 80)).setTo(cv::Scalar(1300));
+  RgbdFrame frame = test::twoBoxes();
   int supervoxels = 0;
   const cv::Mat labels = peers::computeLccp(frame, peers::LccpConfig{}, &supervoxels);
   ASSERT_EQ(labels.type(), CV_32SC1);

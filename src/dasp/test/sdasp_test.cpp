@@ -272,13 +272,7 @@ TEST(Segmentation, CurveEqualsBoundaryScoresPerThreshold) {
 
 TEST(Sdasp, TwoObjectsGiveTwoSegments) {
   // Two boxes side by side at 0.9 m and 1.3 m, same grey, nothing valid around them.
-  const int width = 160, height = 120;
-  RgbdFrame frame;
-  frame.color = test::flatColor(width, height);
-  frame.intrinsics = test::syntheticIntrinsics(width, height);
-  frame.depth = cv::Mat(height, width, CV_16UC1, cv::Scalar(0));
-  frame.depth(cv::Rect(20, 20, 60, 80)).setTo(cv::Scalar(900));
-  frame.depth(cv::Rect(80, 20, 60, 80)).setTo(cv::Scalar(1300));
+  const RgbdFrame frame = test::twoBoxes();
   DaspConfig dasp_config;
   dasp_config.superpixel_count = 150;
   const Superpixels sp = computeDasp(frame, dasp_config);

@@ -23,11 +23,7 @@ cv::Mat computeLccp(const RgbdFrame& frame, const LccpConfig& config, int* super
   }
   pcl::SupervoxelClustering<pcl::PointXYZRGBA> vccs(config.voxel_resolution_m,
                                                     config.seed_resolution_m);
-  vccs.setUseSingleCameraTransform(config.single_camera_transform);
-  vccs.setInputCloud(cloud);
-  vccs.setColorImportance(config.color_importance);
-  vccs.setSpatialImportance(config.spatial_importance);
-  vccs.setNormalImportance(config.normal_importance);
+  configureSupervoxels(vccs, cloud, config);
   std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZRGBA>::Ptr> clusters;
   vccs.extract(clusters);
   if (config.supervoxel_refinement) vccs.refineSupervoxels(2, clusters);

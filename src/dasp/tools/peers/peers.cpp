@@ -156,11 +156,7 @@ cv::Mat computeVccs(const RgbdFrame& frame, const VccsConfig& config, int* runs_
   const auto run = [&](float seed_resolution) {
     const float voxel_resolution = std::min(config.voxel_resolution_m, seed_resolution / 3.0f);
     pcl::SupervoxelClustering<pcl::PointXYZRGBA> vccs(voxel_resolution, seed_resolution);
-    vccs.setUseSingleCameraTransform(config.single_camera_transform);
-    vccs.setInputCloud(cloud);
-    vccs.setColorImportance(config.color_importance);
-    vccs.setSpatialImportance(config.spatial_importance);
-    vccs.setNormalImportance(config.normal_importance);
+    configureSupervoxels(vccs, cloud, config);
     std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZRGBA>::Ptr> clusters;
     vccs.extract(clusters);
     const pcl::PointCloud<pcl::PointXYZL>::Ptr labelled = vccs.getLabeledCloud();
