@@ -3,39 +3,52 @@
 // and count control.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <queue>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
 
 #include "dasp/stages.h"
 #include "parallel.h"
-#include "point_moments.h"
+#include "simd.h"
 
 namespace dasp {
 namespace {
+
+using detail::kLanes;
+#if DASP_VECTOR_EXTENSIONS
+using detail::coverSpan;
+using detail::loadVec;
+using detail::storeVec;
+using detail::Vec8f;
+using detail::Vec8i;
+#endif
 
 constexpr float kPi = 3.14159265358979f;
 constexpr int kChunks = 16;  // fixed row stripes of the assignment
 // Fixed row stripes of the update, each with its own accumulators (same reductions for any
 // thread count); few, because zeroing and summing them costs K * stripes.
-constexpr int kUpdateChunks = 4;
-constexpr int kLanes = 8;  // AVX2 floats per vector: assignment spans are padded to this
+constexpr int kUpdateChunks = 2;
 constexpr float kUnreached = 1e30f;
-constexpr float kInvalidPixel = -1.0f;  // distance of pixels no cluster may take
+// A cluster's points define a plane if their second principal variance is at least this
+// fraction of the first (a strip two pixels wide gives about 0.03).
+constexpr float kMinPlaneSpread = 0.01f;
+// Distance of pixels no cluster may take (the reduced distances of ClusterTerms can be < 0).
+constexpr float kInvalidPixel = -std::numeric_limits<float>::max();
 
-// Accumulator layout per cluster (float sums relative to the cluster's previous centre).
-enum Acc : int {
-  kCount,
-  kSu,
-  kSv,
-  kSuu,
-  kSvv,
-  kSuv,
+// Accumulators per cluster, sums relative to the cluster's previous centre. The pixel-position
+// sums of a run of pixels have closed forms (one float each); the feature sums are kept per
+// vector lane (kLanes floats each) and added up across lanes once per update.
+enum RunAcc : int { kCount, kSu, kSv, kSuu, kSvv, kSuv, kRunAccSize };
+enum LaneAcc : int {
   kSr,
   kSg,
   kSb,
+  kMass,
   kSx,
   kSy,
   kSz,
@@ -45,121 +58,288 @@ enum Acc : int {
   kSyy,
   kSyz,
   kSzz,
-  kMass,
-  kAccSize
+  kLaneAccSize
 };
+constexpr int kClusterAccSize = kRunAccSize + kLaneAccSize * kLanes;  // floats per cluster
 
-// Per-cluster constants of the distance, precomputed once per assign().
+// Per-cluster constants of the distance, precomputed once per assign(). The distance is
+// expanded, |f - f_i|^2 = |f|^2 - 2 f . f_i + |f_i|^2 for colour and (d_DA) 3D position, and
+// the pixel's own |f|^2 terms are dropped: they are the same for every cluster the pixel is
+// compared with, so the nearest cluster does not change. What remains is an affine function of
+// the pixel's features, nine multiply-adds for d_DA (eq. 3.20). The rounding error this adds is
+// about 1e-7 |p|^2 / R^2 (1e-3 at 3 m with R = 2 cm) against distances of order 1: it decides
+// only between clusters that are equally near. The 2D position of kColor2D / kColorDepth2D stays
+// a difference (it is not a pixel feature).
 struct ClusterTerms {
   int x0, x1, y0, y1;  // window, inclusive pixel bounds
+  int id;              // cluster index, the label of the pixels it takes
   float u, v;
-  float r, g, b;
-  float x, y, z;
-  float nx, ny, nz;
-  float reach;    // radius of the disc the cluster can reach, pixels (C R + 1)
-  float spatial;  // weight / radius^2 of the compactness term
-  float depth;    // weight / R^2 of the depth term (kColorDepth2D)
+  float reach;          // radius of the disc the cluster can reach, pixels (C R + 1)
+  float spatial;        // weight / R_rho^2 of the 2D compactness term (kColor2D, kColorDepth2D)
+  float depth;          // weight / R^2 of the depth term (kColorDepth2D)
+  float z;              // depth of the centre (kColorDepth2D)
+  float cr, cg, cb;     // -2 wc c_i
+  float cx, cy, cz;     // -2 (weight / R^2) p_i (d_DA)
+  float cnx, cny, cnz;  // -wn n_i (d_DA)
+  float offset;         // wc |c_i|^2 (d_DA: + weight |p_i|^2 / R^2 + wn)
 };
 
-// One row of the d_DA assignment (eq. 3.20) over columns x0..x1. Built for AVX2 and the
-// baseline instruction set (selected at load time where the compiler supports it): this loop
-// is most of DASP's runtime.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void depthAdaptiveRow(const float* __restrict r, const float* __restrict g,
-                      const float* __restrict b, const float* __restrict px,
-                      const float* __restrict py, const float* __restrict pz,
-                      const float* __restrict nx, const float* __restrict ny,
-                      const float* __restrict nz, float* __restrict d_row, int* __restrict l_row,
-                      // cppcheck-suppress passedByValue ; a by-value copy keeps the terms in registers
-                      int x0, int x1, int span_end, const ClusterTerms t, float wc, float wn,
-                      int id) {
-  for (int col = x0; col < span_end; ++col) {
-    const float dx = px[col] - t.x, dy = py[col] - t.y, dz = pz[col] - t.z;
-    const float dr = r[col] - t.r, dg = g[col] - t.g, db = b[col] - t.b;
-    const float dot = nx[col] * t.nx + ny[col] * t.ny + nz[col] * t.nz;
-    const float d = t.spatial * (dx * dx + dy * dy + dz * dz) + wc * (dr * dr + dg * dg + db * db) +
-                    wn * (1.0f - dot);
-    // Branch-free select so that the loop vectorises.
-    const float old = d_row[col];
-    const bool closer = (d < old) & (col <= x1);
-    const int take = -static_cast<int>(closer);
-    d_row[col] = closer ? d : old;
-    l_row[col] = (l_row[col] & ~take) | (id & take);
+// Columns [x0, x1] of a cluster's reach disc in one row (empty if x0 > x1). Only the chord of
+// the disc: pixels in the corners of the bounding square are farther than C R from the centre
+// (alg. 3 tests the cluster's reach; the square is the thesis' simplification, 27 % more
+// distance evaluations).
+DASP_ALWAYS_INLINE void reachSpan(const ClusterTerms& t, int row, int& x0, int& x1) {
+  const float dv = static_cast<float>(row) - t.v;
+  const float chord = std::sqrt(std::max(0.0f, t.reach * t.reach - dv * dv));
+  x0 = std::max(t.x0, static_cast<int>(std::ceil(t.u - chord)));
+  x1 = std::min(t.x1, static_cast<int>(std::floor(t.u + chord)));
+}
+
+// The features of one image row.
+struct FeatureRow {
+  const float *r, *g, *b, *x, *y, *z, *nx, *ny, *nz;
+  const std::uint8_t* valid;
+};
+
+DASP_ALWAYS_INLINE FeatureRow featureRow(const PixelFeatures& f, int row) {
+  const std::size_t base = static_cast<std::size_t>(row) * f.width;
+  const bool depth = f.hasDepth();
+  return {f.r.data() + base,
+          f.g.data() + base,
+          f.b.data() + base,
+          depth ? f.x.data() + base : nullptr,
+          depth ? f.y.data() + base : nullptr,
+          depth ? f.z.data() + base : nullptr,
+          depth ? f.nx.data() + base : nullptr,
+          depth ? f.ny.data() + base : nullptr,
+          depth ? f.nz.data() + base : nullptr,
+          f.valid.data() + base};
+}
+
+// The (reduced, see ClusterTerms) distance of pixels to cluster t, for one pixel (float, int)
+// or eight (Vec8f, Vec8i). dv2: squared row offset from the centre (2D metrics).
+template <MetricKind kKind, typename VecF, typename VecI, typename Load>
+DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load, VecI col,
+                                        float dv2) {
+  VecF d = t.offset + t.cr * load(&FeatureRow::r) + t.cg * load(&FeatureRow::g) +
+           t.cb * load(&FeatureRow::b);
+  if constexpr (kKind == MetricKind::kDepthAdaptive) {
+    d += t.cx * load(&FeatureRow::x) + t.cy * load(&FeatureRow::y) + t.cz * load(&FeatureRow::z) +
+         t.cnx * load(&FeatureRow::nx) + t.cny * load(&FeatureRow::ny) +
+         t.cnz * load(&FeatureRow::nz);
+  } else {
+    VecF du;
+    if constexpr (std::is_same_v<VecF, float>) {
+      du = static_cast<float>(col) - t.u;
+    } else {
+      du = __builtin_convertvector(col, VecF) - t.u;
+    }
+    d += t.spatial * (du * du + dv2);
+    if constexpr (kKind == MetricKind::kColorDepth2D) {
+      const VecF dz = load(&FeatureRow::z) - t.z;
+      d += t.depth * dz * dz;
+    }
   }
+  return d;
+}
+
+// The assignment of rows [row_begin, row_end): each pixel to the nearest cluster whose reach
+// disc holds it. Row by row, every cluster whose window meets the row in turn, in cluster order
+// (the order in which alg. 3's cluster-by-cluster loop visits a pixel, so ties go the same
+// way): the row's features stay in the L1 cache for the three or so clusters that reach each
+// pixel, where a cluster-by-cluster loop would fetch them from L2 each time.
+template <MetricKind kKind>
+DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* terms,
+                                   std::size_t count, int row_begin, int row_end,
+                                   float* __restrict dist, int* __restrict label) {
+  const int width = f.width;
+  std::vector<const ClusterTerms*> active;
+  for (std::size_t k = 0; k < count; ++k) {
+    if (terms[k].y1 >= row_begin && terms[k].y0 < row_end) active.push_back(terms + k);
+  }
+  for (int row = row_begin; row < row_end; ++row) {
+    const FeatureRow fr = featureRow(f, row);
+    const std::size_t base = static_cast<std::size_t>(row) * width;
+    float* __restrict d_row = dist + base;
+    int* __restrict l_row = label + base;
+    for (int col = 0; col < width; ++col) {
+      d_row[col] = fr.valid[col] ? kUnreached : kInvalidPixel;
+      l_row[col] = -1;
+    }
+    for (const ClusterTerms* cluster : active) {
+      if (row < cluster->y0 || row > cluster->y1) continue;
+      const ClusterTerms t = *cluster;  // a copy: the stores below cannot alias it
+      int x0 = 0, x1 = -1;
+      reachSpan(t, row, x0, x1);
+      if (x0 > x1) continue;
+      const float dv = static_cast<float>(row) - t.v;
+      const float dv2 = dv * dv;
+#if DASP_VECTOR_EXTENSIONS
+      {
+        int start = 0, stop = 0;
+        if (coverSpan(x0, x1 + 1, width, start, stop)) {
+          Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
+          for (int c = start; c < stop; c += kLanes, col += kLanes) {
+            const auto load = [&fr, c](const float* FeatureRow::*field) {
+              return loadVec<Vec8f>(fr.*field + c);
+            };
+            const Vec8f d = clusterDistance<kKind, Vec8f>(t, load, col, dv2);
+            const Vec8f old = loadVec<Vec8f>(d_row + c);
+            const Vec8i closer = (d < old) & (col >= x0) & (col <= x1);
+            storeVec(d_row + c, closer ? d : old);
+            storeVec(l_row + c, closer ? t.id + Vec8i{} : loadVec<Vec8i>(l_row + c));
+          }
+          continue;
+        }
+      }
+#endif
+      for (int col = x0; col <= x1; ++col) {
+        const auto load = [&fr, col](const float* FeatureRow::*field) { return (fr.*field)[col]; };
+        const float d = clusterDistance<kKind, float>(t, load, col, dv2);
+        if (d < d_row[col]) {
+          d_row[col] = d;
+          l_row[col] = t.id;
+        }
+      }
+    }
+  }
+}
+
+DASP_VECTOR_CLONES void assignRowsDepthAdaptive(const PixelFeatures& f, const ClusterTerms* terms,
+                                                std::size_t count, int row_begin, int row_end,
+                                                float* dist, int* label) {
+  assignRows<MetricKind::kDepthAdaptive>(f, terms, count, row_begin, row_end, dist, label);
+}
+
+DASP_VECTOR_CLONES void assignRowsColor2D(const PixelFeatures& f, const ClusterTerms* terms,
+                                          std::size_t count, int row_begin, int row_end,
+                                          float* dist, int* label) {
+  assignRows<MetricKind::kColor2D>(f, terms, count, row_begin, row_end, dist, label);
+}
+
+DASP_VECTOR_CLONES void assignRowsColorDepth2D(const PixelFeatures& f, const ClusterTerms* terms,
+                                               std::size_t count, int row_begin, int row_end,
+                                               float* dist, int* label) {
+  assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label);
+}
+
+// Adds the features of the pixels [begin, end) of one row, all of one cluster, to the
+// cluster's lane accumulators (LaneAcc, kLanes floats each). Positions relative to (rx, ry, rz).
+template <bool kDepth>
+DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density, int width,
+                                      int begin, int end, float rx, float ry, float rz,
+                                      float* __restrict acc) {
+#if DASP_VECTOR_EXTENSIONS
+  {
+    int start = 0, stop = 0;
+    if (coverSpan(begin, end, width, start, stop)) {
+      constexpr int kUsed = kDepth ? kLaneAccSize : kSx;
+      Vec8f sum[kUsed];
+      for (int q = 0; q < kUsed; ++q) sum[q] = loadVec<Vec8f>(acc + q * kLanes);
+      Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
+      const Vec8f zero{};
+      for (int c = start; c < stop; c += kLanes, col += kLanes) {
+        const Vec8i in = (col >= begin) & (col < end);
+        sum[kSr] += in ? loadVec<Vec8f>(fr.r + c) : zero;
+        sum[kSg] += in ? loadVec<Vec8f>(fr.g + c) : zero;
+        sum[kSb] += in ? loadVec<Vec8f>(fr.b + c) : zero;
+        sum[kMass] += in ? loadVec<Vec8f>(density + c) : zero;
+        if constexpr (kDepth) {
+          const Vec8f dx = in ? loadVec<Vec8f>(fr.x + c) - rx : zero;
+          const Vec8f dy = in ? loadVec<Vec8f>(fr.y + c) - ry : zero;
+          const Vec8f dz = in ? loadVec<Vec8f>(fr.z + c) - rz : zero;
+          sum[kSx] += dx;
+          sum[kSy] += dy;
+          sum[kSz] += dz;
+          sum[kSxx] += dx * dx;
+          sum[kSxy] += dx * dy;
+          sum[kSxz] += dx * dz;
+          sum[kSyy] += dy * dy;
+          sum[kSyz] += dy * dz;
+          sum[kSzz] += dz * dz;
+        }
+      }
+      for (int q = 0; q < kUsed; ++q) storeVec(acc + q * kLanes, sum[q]);
+      return;
+    }
+  }
+#endif
+  for (int col = begin; col < end; ++col) {  // lane 0 only
+    acc[kSr * kLanes] += fr.r[col];
+    acc[kSg * kLanes] += fr.g[col];
+    acc[kSb * kLanes] += fr.b[col];
+    acc[kMass * kLanes] += density[col];
+    if constexpr (kDepth) {
+      const float dx = fr.x[col] - rx, dy = fr.y[col] - ry, dz = fr.z[col] - rz;
+      acc[kSx * kLanes] += dx;
+      acc[kSy * kLanes] += dy;
+      acc[kSz * kLanes] += dz;
+      acc[kSxx * kLanes] += dx * dx;
+      acc[kSxy * kLanes] += dx * dy;
+      acc[kSxz * kLanes] += dx * dz;
+      acc[kSyy * kLanes] += dy * dy;
+      acc[kSyz * kLanes] += dy * dz;
+      acc[kSzz * kLanes] += dz * dz;
+    }
+  }
+}
+
+// The update sums of rows [row_begin, row_end) into acc (kClusterAccSize floats per cluster).
+// Labels come in horizontal runs: the pixel-position sums of a run have closed forms, and the
+// feature sums of a run go to the lane accumulators.
+template <bool kDepth>
+DASP_ALWAYS_INLINE void accumulateRows(const PixelFeatures& f, const float* density,
+                                       const int* labels, const Cluster* clusters, int row_begin,
+                                       int row_end, float* __restrict acc) {
+  const int width = f.width;
+  for (int row = row_begin; row < row_end; ++row) {
+    const std::size_t base = static_cast<std::size_t>(row) * width;
+    const FeatureRow fr = featureRow(f, row);
+    const int* row_labels = labels + base;
+    int col = 0;
+    while (col < width) {
+      const int k = row_labels[col];
+      int end = col + 1;
+      while (end < width && row_labels[end] == k) ++end;
+      if (k >= 0) {
+        const Cluster& c = clusters[k];
+        float* a = acc + static_cast<std::size_t>(k) * kClusterAccSize;
+        const float dv = static_cast<float>(row) - c.v;
+        const float run = static_cast<float>(end - col);
+        const float first = static_cast<float>(col) - c.u;
+        // Sum of (first + j) and (first + j)^2 for j = 0 .. run - 1.
+        const float su = run * first + 0.5f * run * (run - 1.0f);
+        const float suu = run * first * first + first * run * (run - 1.0f) +
+                          (run - 1.0f) * run * (2.0f * run - 1.0f) / 6.0f;
+        a[kCount] += run;
+        a[kSu] += su;
+        a[kSv] += run * dv;
+        a[kSuu] += suu;
+        a[kSvv] += run * dv * dv;
+        a[kSuv] += su * dv;
+        accumulateRun<kDepth>(fr, density + base, width, col, end, c.position.x(), c.position.y(),
+                              c.position.z(), a + kRunAccSize);
+      }
+      col = end;
+    }
+  }
+}
+
+DASP_VECTOR_CLONES void accumulateRowsDepth(const PixelFeatures& f, const float* density,
+                                            const int* labels, const Cluster* clusters,
+                                            int row_begin, int row_end, float* acc) {
+  accumulateRows<true>(f, density, labels, clusters, row_begin, row_end, acc);
+}
+
+DASP_VECTOR_CLONES void accumulateRowsColor(const PixelFeatures& f, const float* density,
+                                            const int* labels, const Cluster* clusters,
+                                            int row_begin, int row_end, float* acc) {
+  accumulateRows<false>(f, density, labels, clusters, row_begin, row_end, acc);
 }
 
 }  // namespace
 
 struct Dalic::Impl {
-  template <MetricKind kKind>
-  static void assignRows(Dalic& self, const std::vector<ClusterTerms>& terms, int row_begin,
-                         int row_end) {
-    const PixelFeatures& f = self.features_;
-    const int width = f.width;
-    const float wc = self.params_.weight_color;
-    const float wn = self.params_.weight_normal;
-    float* __restrict dist = self.distance_.data();
-    int* __restrict label = self.labels_.data();
-    for (std::size_t k = 0; k < terms.size(); ++k) {
-      const ClusterTerms t = terms[k];  // a copy: the stores below cannot alias it
-      const int y0 = std::max(t.y0, row_begin);
-      const int y1 = std::min(t.y1, row_end - 1);
-      const int id = static_cast<int>(k);
-      const float reach2 = t.reach * t.reach;
-      for (int row = y0; row <= y1; ++row) {
-        // Only the chord of the reach disc in this row: pixels in the corners of the bounding
-        // square are farther than C R from the centre (alg. 3 tests the cluster's reach; the
-        // square is the thesis' simplification, 27 % more distance evaluations).
-        const float dv_c = static_cast<float>(row) - t.v;
-        const float chord = std::sqrt(std::max(0.0f, reach2 - dv_c * dv_c));
-        const int x0 = std::max(t.x0, static_cast<int>(std::ceil(t.u - chord)));
-        const int x1 = std::min(t.x1, static_cast<int>(std::floor(t.u + chord)));
-        if (x0 > x1) continue;
-        // The span is rounded up to whole vectors (within the row), lanes past x1 masked out:
-        // a scalar remainder loop would cost as much as the vector part on these short rows.
-        const int span_end = std::min(width, x0 + ((x1 - x0 + kLanes) / kLanes) * kLanes);
-        const std::size_t base = static_cast<std::size_t>(row) * width;
-        const float* __restrict r = f.r.data() + base;
-        const float* __restrict g = f.g.data() + base;
-        const float* __restrict b = f.b.data() + base;
-        float* __restrict d_row = dist + base;
-        int* __restrict l_row = label + base;
-        if constexpr (kKind == MetricKind::kDepthAdaptive) {
-          const float* __restrict px = f.x.data() + base;
-          const float* __restrict py = f.y.data() + base;
-          const float* __restrict pz = f.z.data() + base;
-          const float* __restrict nx = f.nx.data() + base;
-          const float* __restrict ny = f.ny.data() + base;
-          const float* __restrict nz = f.nz.data() + base;
-          depthAdaptiveRow(r, g, b, px, py, pz, nx, ny, nz, d_row, l_row, x0, x1, span_end, t, wc,
-                           wn, id);
-        } else {
-          const float dv = static_cast<float>(row) - t.v;
-          const float dv2 = dv * dv;
-          const float* __restrict pz =
-              kKind == MetricKind::kColorDepth2D ? f.z.data() + base : nullptr;
-          for (int col = x0; col < span_end; ++col) {
-            const float du = static_cast<float>(col) - t.u;
-            const float dr = r[col] - t.r, dg = g[col] - t.g, db = b[col] - t.b;
-            float d = t.spatial * (du * du + dv2) + wc * (dr * dr + dg * dg + db * db);
-            if constexpr (kKind == MetricKind::kColorDepth2D) {
-              const float dz = pz[col] - t.z;
-              d += t.depth * dz * dz;
-            }
-            // Branch-free select so that the loop vectorises.
-            const float old = d_row[col];
-            const bool closer = (d < old) & (col <= x1);
-            const int take = -static_cast<int>(closer);
-            d_row[col] = closer ? d : old;
-            l_row[col] = (l_row[col] & ~take) | (id & take);
-          }
-        }
-      }
-    }
-  }
-
   static ClusterTerms terms(const Dalic& self, const Cluster& c) {
     const PixelFeatures& f = self.features_;
     const DalicParams& p = self.params_;
@@ -175,21 +355,25 @@ struct Dalic::Impl {
     t.y1 = std::min(f.height - 1, static_cast<int>(std::floor(c.v + half)));
     t.u = c.u;
     t.v = c.v;
-    t.r = c.color.x();
-    t.g = c.color.y();
-    t.b = c.color.z();
-    t.x = c.position.x();
-    t.y = c.position.y();
-    t.z = c.position.z();
-    t.nx = c.normal.x();
-    t.ny = c.normal.y();
-    t.nz = c.normal.z();
-    const float radius_m2 = p.radius_m * p.radius_m;
+    const float wc = p.weight_color;
+    t.cr = -2.0f * wc * c.color.x();
+    t.cg = -2.0f * wc * c.color.y();
+    t.cb = -2.0f * wc * c.color.z();
+    t.offset = wc * c.color.squaredNorm();
+    const float inv_radius_m2 = 1.0f / (p.radius_m * p.radius_m);
     if (p.metric == MetricKind::kDepthAdaptive) {
-      t.spatial = p.weight_spatial / radius_m2;
+      const float spatial = p.weight_spatial * inv_radius_m2;
+      t.cx = -2.0f * spatial * c.position.x();
+      t.cy = -2.0f * spatial * c.position.y();
+      t.cz = -2.0f * spatial * c.position.z();
+      t.cnx = -p.weight_normal * c.normal.x();
+      t.cny = -p.weight_normal * c.normal.y();
+      t.cnz = -p.weight_normal * c.normal.z();
+      t.offset += spatial * c.position.squaredNorm() + p.weight_normal;
     } else {
       t.spatial = p.weight_spatial / (c.radius_px * c.radius_px);
-      t.depth = p.weight_spatial / radius_m2;
+      t.depth = p.weight_spatial * inv_radius_m2;
+      t.z = c.position.z();
     }
     return t;
   }
@@ -290,24 +474,26 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
 
 void Dalic::assign() {
   const PixelFeatures& f = features_;
-  const std::size_t n = f.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    distance_[i] = f.valid[i] ? kUnreached : kInvalidPixel;
-    labels_[i] = -1;
-  }
   std::vector<ClusterTerms> terms;
   terms.reserve(clusters_.size());
-  for (const Cluster& c : clusters_) terms.push_back(Impl::terms(*this, c));
+  for (std::size_t k = 0; k < clusters_.size(); ++k) {
+    terms.push_back(Impl::terms(*this, clusters_[k]));
+    terms.back().id = static_cast<int>(k);
+  }
+  const ClusterTerms* t = terms.data();
+  const std::size_t count = terms.size();
+  float* dist = distance_.data();
+  int* label = labels_.data();
   detail::forChunks(f.height, kChunks, params_.threads, [&](int, int row_begin, int row_end) {
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
-        Impl::assignRows<MetricKind::kDepthAdaptive>(*this, terms, row_begin, row_end);
+        assignRowsDepthAdaptive(f, t, count, row_begin, row_end, dist, label);
         break;
       case MetricKind::kColor2D:
-        Impl::assignRows<MetricKind::kColor2D>(*this, terms, row_begin, row_end);
+        assignRowsColor2D(f, t, count, row_begin, row_end, dist, label);
         break;
       case MetricKind::kColorDepth2D:
-        Impl::assignRows<MetricKind::kColorDepth2D>(*this, terms, row_begin, row_end);
+        assignRowsColorDepth2D(f, t, count, row_begin, row_end, dist, label);
         break;
     }
   });
@@ -318,86 +504,48 @@ void Dalic::update() {
   const std::size_t k_count = clusters_.size();
   if (k_count == 0) return;
   const bool depth = f.hasDepth();
-  const std::size_t stride = static_cast<std::size_t>(kAccSize) * k_count;
-  accumulators_.assign(stride * kUpdateChunks, 0.0f);
+  const std::size_t stride = static_cast<std::size_t>(kClusterAccSize) * k_count;
+  accumulators_.resize(stride * kUpdateChunks);
+  std::memset(accumulators_.data(), 0, accumulators_.size() * sizeof(float));
   const float* density = density_.ptr<float>();
-  detail::forChunks(
-      f.height, kUpdateChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
-        float* acc_base = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
-        // Labels come in horizontal runs: sum each run in registers, then add it once.
-        for (int row = row_begin; row < row_end; ++row) {
-          const std::size_t base = static_cast<std::size_t>(row) * f.width;
-          const int* row_labels = labels_.data() + base;
-          int col = 0;
-          while (col < f.width) {
-            const int k = row_labels[col];
-            int end = col + 1;
-            while (end < f.width && row_labels[end] == k) ++end;
-            if (k >= 0) {
-              const Cluster& c = clusters_[static_cast<std::size_t>(k)];
-              float* a = acc_base + static_cast<std::size_t>(k) * kAccSize;
-              const float dv = static_cast<float>(row) - c.v;
-              const float run = static_cast<float>(end - col);
-              const float first = static_cast<float>(col) - c.u;
-              // Sum of (first + j) and (first + j)^2 for j = 0 .. run - 1.
-              const float su = run * first + 0.5f * run * (run - 1.0f);
-              const float suu = run * first * first + first * run * (run - 1.0f) +
-                                (run - 1.0f) * run * (2.0f * run - 1.0f) / 6.0f;
-              a[kCount] += run;
-              a[kSu] += su;
-              a[kSv] += run * dv;
-              a[kSuu] += suu;
-              a[kSvv] += run * dv * dv;
-              a[kSuv] += su * dv;
-              float sr = 0, sg = 0, sb = 0, mass = 0;
-              for (int x = col; x < end; ++x) {
-                sr += f.r[base + x];
-                sg += f.g[base + x];
-                sb += f.b[base + x];
-                mass += density[base + x];
-              }
-              a[kSr] += sr;
-              a[kSg] += sg;
-              a[kSb] += sb;
-              a[kMass] += mass;
-              if (depth) {
-                const detail::PointMoments m = detail::sumPointMoments(
-                    f.x.data() + base, f.y.data() + base, f.z.data() + base, col, end,
-                    c.position.x(), c.position.y(), c.position.z());
-                a[kSx] += m.sx;
-                a[kSy] += m.sy;
-                a[kSz] += m.sz;
-                a[kSxx] += m.sxx;
-                a[kSxy] += m.sxy;
-                a[kSxz] += m.sxz;
-                a[kSyy] += m.syy;
-                a[kSyz] += m.syz;
-                a[kSzz] += m.szz;
-              }
-            }
-            col = end;
-          }
-        }
-      });
-  for (int chunk = 1; chunk < kUpdateChunks; ++chunk) {
-    const float* src = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
-    for (std::size_t j = 0; j < stride; ++j) accumulators_[j] += src[j];
-  }
+  detail::forChunks(f.height, kUpdateChunks, params_.threads,
+                    [&](int chunk, int row_begin, int row_end) {
+                      float* acc = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
+                      if (depth) {
+                        accumulateRowsDepth(f, density, labels_.data(), clusters_.data(), row_begin,
+                                            row_end, acc);
+                      } else {
+                        accumulateRowsColor(f, density, labels_.data(), clusters_.data(), row_begin,
+                                            row_end, acc);
+                      }
+                    });
 
   std::vector<Cluster> next;
   next.reserve(k_count + static_cast<std::size_t>(std::max(0, params_.target_count)));
   for (std::size_t k = 0; k < k_count; ++k) {
-    const float* a = accumulators_.data() + k * kAccSize;
+    // This cluster's sums over the chunks (in chunk order) and lanes.
+    float a[kRunAccSize + kLaneAccSize] = {};
+    for (int chunk = 0; chunk < kUpdateChunks; ++chunk) {
+      const float* src =
+          accumulators_.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
+      for (int q = 0; q < kRunAccSize; ++q) a[q] += src[q];
+      for (int q = 0; q < kLaneAccSize; ++q) {
+        float lanes = 0.0f;
+        for (int lane = 0; lane < kLanes; ++lane) lanes += src[kRunAccSize + q * kLanes + lane];
+        a[kRunAccSize + q] += lanes;
+      }
+    }
     const float n = a[kCount];
-    if (n <= 0.0f || a[kMass] < params_.min_size_fraction) continue;  // purge
+    if (n <= 0.0f || a[kRunAccSize + kMass] < params_.min_size_fraction) continue;  // purge
     Cluster c = clusters_[k];
     const float inv_n = 1.0f / n;
     const float mu = a[kSu] * inv_n, mv = a[kSv] * inv_n;
     c.u += mu;
     c.v += mv;
-    c.color = Eigen::Vector3f(a[kSr], a[kSg], a[kSb]) * inv_n;
+    c.color =
+        Eigen::Vector3f(a[kRunAccSize + kSr], a[kRunAccSize + kSg], a[kRunAccSize + kSb]) * inv_n;
     c.pixel_count = static_cast<int>(n);
-    c.mass = a[kMass];
+    c.mass = a[kRunAccSize + kMass];
     // Principal 2D axis for splitting.
     const float cuu = a[kSuu] * inv_n - mu * mu;
     const float cvv = a[kSvv] * inv_n - mv * mv;
@@ -412,16 +560,25 @@ void Dalic::update() {
     c.spread_u = axis.x();
     c.spread_v = axis.y();
     if (depth) {
-      const Eigen::Vector3f mean(a[kSx] * inv_n, a[kSy] * inv_n, a[kSz] * inv_n);
+      const Eigen::Vector3f mean(a[kRunAccSize + kSx] * inv_n, a[kRunAccSize + kSy] * inv_n,
+                                 a[kRunAccSize + kSz] * inv_n);
       c.position += mean;
       if (n >= 4.0f) {
         Eigen::Matrix3f cov;
-        cov << a[kSxx] * inv_n, a[kSxy] * inv_n, a[kSxz] * inv_n, a[kSxy] * inv_n, a[kSyy] * inv_n,
-            a[kSyz] * inv_n, a[kSxz] * inv_n, a[kSyz] * inv_n, a[kSzz] * inv_n;
+        cov << a[kRunAccSize + kSxx] * inv_n, a[kRunAccSize + kSxy] * inv_n,
+            a[kRunAccSize + kSxz] * inv_n, a[kRunAccSize + kSxy] * inv_n,
+            a[kRunAccSize + kSyy] * inv_n, a[kRunAccSize + kSyz] * inv_n,
+            a[kRunAccSize + kSxz] * inv_n, a[kRunAccSize + kSyz] * inv_n,
+            a[kRunAccSize + kSzz] * inv_n;
         cov -= mean * mean.transpose();
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver;
         solver.computeDirect(cov);
-        c.normal = solver.eigenvectors().col(0);  // smallest eigenvalue: plane normal (eq. 3.22)
+        // Smallest eigenvalue: plane normal (eq. 3.22). Points on a line (a superpixel squeezed
+        // into one pixel column, as on steep surfaces at the image border) define no plane:
+        // their "normal" would be any direction across the line and the normal term would
+        // push every pixel away, so the previous normal is kept.
+        const Eigen::Vector3f lambda = solver.eigenvalues();  // ascending
+        if (lambda(1) > kMinPlaneSpread * lambda(2)) c.normal = solver.eigenvectors().col(0);
       }  // else: too few points for a plane fit, keep the previous normal
       if (!(c.normal.norm() > 0.0f) || !c.normal.allFinite()) c.normal = -Eigen::Vector3f::UnitZ();
       c.normal.normalize();

@@ -1,16 +1,20 @@
 // Input checks, per-pixel features (thesis §3.2.1) and densities (§3.2.2).
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "dasp/stages.h"
 #include "parallel.h"
+#include "simd.h"
 
 namespace dasp {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
+constexpr int kFeatureChunks = 16;  // row stripes of the per-pixel passes
 
 bool finitePositive(float value) { return std::isfinite(value) && value > 0.0f; }
 
@@ -167,13 +171,11 @@ inline void normalAndArea(float zc, float dz_du, float dz_dv, float ray_x, float
 }
 
 // Interior of one row (columns [begin, end) have all neighbours in the image): vectorised.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void normalRowInterior(const float* __restrict z, std::ptrdiff_t stride, int step, float jump,
-                       float ray_y, const NormalParams p, int begin, int end,
-                       float* __restrict nx, float* __restrict ny, float* __restrict nz,
-                       float* __restrict area) {
+DASP_VECTOR_CLONES void normalRowInterior(const float* __restrict z, std::ptrdiff_t stride,
+                                          int step, float jump, float ray_y, const NormalParams p,
+                                          int begin, int end, float* __restrict nx,
+                                          float* __restrict ny, float* __restrict nz,
+                                          float* __restrict area) {
   const float h = static_cast<float>(step);
   for (int col = begin; col < end; ++col) {
     const float zc = z[col];
@@ -184,6 +186,39 @@ void normalRowInterior(const float* __restrict z, std::ptrdiff_t stride, int ste
     const float ray_x = (static_cast<float>(col) - p.cx) * p.inv_fx;
     normalAndArea(zc, dz_du, dz_dv, ray_x, ray_y, p, nx[col], ny[col], nz[col], area[col]);
   }
+}
+
+// Colour, depth (metres), 3D point (eq. 3.4) and validity of one row; returns the number of
+// valid pixels. Depth is CV_16UC1 millimetres (depth_mm) or CV_32FC1 metres (depth_m).
+DASP_VECTOR_CLONES int pointRow(const std::uint8_t* __restrict bgr,
+                                const std::uint16_t* __restrict depth_mm,
+                                const float* __restrict depth_m, int width, float inv_fx, float cx,
+                                float ray_y, float* __restrict r, float* __restrict g,
+                                float* __restrict b, float* __restrict x, float* __restrict y,
+                                float* __restrict z, std::uint8_t* __restrict valid) {
+  for (int col = 0; col < width; ++col) {
+    b[col] = static_cast<float>(bgr[3 * col]) * (1.0f / 255.0f);
+    g[col] = static_cast<float>(bgr[3 * col + 1]) * (1.0f / 255.0f);
+    r[col] = static_cast<float>(bgr[3 * col + 2]) * (1.0f / 255.0f);
+  }
+  if (depth_mm != nullptr) {
+    for (int col = 0; col < width; ++col) z[col] = 0.001f * static_cast<float>(depth_mm[col]);
+  } else {
+    for (int col = 0; col < width; ++col) {
+      const float d = depth_m[col];
+      // NaN, infinity and values <= 0 are invalid (comparisons with NaN are false).
+      z[col] = (d > 0.0f) & (d <= std::numeric_limits<float>::max()) ? d : 0.0f;
+    }
+  }
+  int count = 0;
+  for (int col = 0; col < width; ++col) {
+    const bool ok = z[col] > 0.0f;
+    valid[col] = ok ? 1 : 0;
+    count += ok ? 1 : 0;
+    x[col] = z[col] * (static_cast<float>(col) - cx) * inv_fx;
+    y[col] = z[col] * ray_y;
+  }
+  return count;
 }
 
 }  // namespace
@@ -220,34 +255,23 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
 
   // Pass 1: colour, depth and 3D points (eq. 3.4).
   const bool millimetres = frame.depth.type() == CV_16UC1;
-  detail::forChunks(height, 16, config.threads, [&](int, int row_begin, int row_end) {
-    for (int row = row_begin; row < row_end; ++row) {
-      const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
-      const std::size_t base = static_cast<std::size_t>(row) * width;
-      colorRow(frame.color.ptr<cv::Vec3b>(row), width, features.r.data() + base,
-               features.g.data() + base, features.b.data() + base);
-      float* z = features.z.data() + base;
-      if (millimetres) {
-        const std::uint16_t* src = frame.depth.ptr<std::uint16_t>(row);
-        for (int col = 0; col < width; ++col) z[col] = 0.001f * static_cast<float>(src[col]);
-      } else {
-        const float* src = frame.depth.ptr<float>(row);
-        for (int col = 0; col < width; ++col) {
-          z[col] = (std::isfinite(src[col]) && src[col] > 0.0f) ? src[col] : 0.0f;
+  std::array<int, kFeatureChunks> chunk_valid{};
+  detail::forChunks(
+      height, kFeatureChunks, config.threads, [&](int chunk, int row_begin, int row_end) {
+        for (int row = row_begin; row < row_end; ++row) {
+          const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
+          const std::size_t base = static_cast<std::size_t>(row) * width;
+          chunk_valid[static_cast<std::size_t>(chunk)] +=
+              pointRow(frame.color.ptr<std::uint8_t>(row),
+                       millimetres ? frame.depth.ptr<std::uint16_t>(row) : nullptr,
+                       millimetres ? nullptr : frame.depth.ptr<float>(row), width, inv_fx, k.cx,
+                       ray_y, features.r.data() + base, features.g.data() + base,
+                       features.b.data() + base, features.x.data() + base, features.y.data() + base,
+                       features.z.data() + base, features.valid.data() + base);
         }
-      }
-      float* x = features.x.data() + base;
-      float* y = features.y.data() + base;
-      std::uint8_t* valid = features.valid.data() + base;
-      for (int col = 0; col < width; ++col) {
-        valid[col] = z[col] > 0.0f ? 1 : 0;
-        x[col] = z[col] * (static_cast<float>(col) - k.cx) * inv_fx;
-        y[col] = z[col] * ray_y;
-      }
-    }
-  });
+      });
   int valid_count = 0;
-  for (std::uint8_t v : features.valid) valid_count += v;
+  for (int v : chunk_valid) valid_count += v;
   features.valid_count = valid_count;
   if (valid_count == 0) {
     throw std::invalid_argument("DASP: the depth image has no valid pixel (all zero, NaN or <= 0)");
@@ -270,7 +294,7 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
                ? z_all[static_cast<std::size_t>(row) * width + col]
                : 0.0f;
   };
-  detail::forChunks(height, 16, config.threads, [&](int, int row_begin, int row_end) {
+  detail::forChunks(height, kFeatureChunks, config.threads, [&](int, int row_begin, int row_end) {
     for (int row = row_begin; row < row_end; ++row) {
       const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
       const std::size_t base = static_cast<std::size_t>(row) * width;

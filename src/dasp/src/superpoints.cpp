@@ -348,7 +348,10 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(cov);  // closed form: per-superpixel cost must not grow with K
     const Eigen::Vector3d w = solver.eigenvalues().cwiseMax(0.0);  // ascending
-    Eigen::Vector3d normal = s.n >= 3.0 ? Eigen::Vector3d(solver.eigenvectors().col(0)) : s.normal;
+    // Plane-fit normal (eq. 3.22) where the points span a plane; for fewer than 3 points or
+    // points on a line (second principal variance under 1 % of the first) the mean pixel normal.
+    const bool plane = s.n >= 3.0 && w(1) > 0.01 * w(2);
+    Eigen::Vector3d normal = plane ? Eigen::Vector3d(solver.eigenvectors().col(0)) : s.normal;
     if (!(normal.norm() > 0.0)) normal = -Eigen::Vector3d::UnitZ();
     normal.normalize();
     if (normal.dot(sp.position.cast<double>()) > 0.0) normal = -normal;

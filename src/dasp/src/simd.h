@@ -1,0 +1,57 @@
+// Vectorisation helpers of the per-pixel loops (internal to the dasp library): load-time
+// selection of AVX-512 / AVX2 / baseline builds of a function, and GCC vector extensions, eight
+// floats at a time.
+#pragma once
+
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define DASP_ALWAYS_INLINE inline __attribute__((always_inline))
+// The function is built for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA) and the baseline, and the
+// best one for the CPU is chosen when the library is loaded: Debian builds for the baseline.
+#define DASP_VECTOR_CLONES \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define DASP_ALWAYS_INLINE inline
+#define DASP_VECTOR_CLONES
+#endif
+
+namespace dasp::detail {
+
+constexpr int kLanes = 8;  // floats per vector
+
+#if defined(__GNUC__) && !defined(__clang__)
+#define DASP_VECTOR_EXTENSIONS 1
+#else
+#define DASP_VECTOR_EXTENSIONS 0  // the scalar loops run
+#endif
+
+#if DASP_VECTOR_EXTENSIONS
+// Eight floats / ints: AVX2 or AVX-512 registers in those builds, two SSE registers in the
+// baseline one. Functions taking or returning them are always inlined (no vector ABI crosses an
+// object boundary; the build turns GCC's -Wpsabi note off for this reason).
+typedef float Vec8f __attribute__((vector_size(32)));
+typedef int Vec8i __attribute__((vector_size(32)));
+template <typename Vec, typename T>
+DASP_ALWAYS_INLINE Vec loadVec(const T* p) {  // unaligned
+  Vec v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+template <typename Vec, typename T>
+DASP_ALWAYS_INLINE void storeVec(T* p, const Vec& v) {  // unaligned
+  __builtin_memcpy(p, &v, sizeof v);
+}
+#endif
+
+/// Whole vectors covering columns [begin, end) of a row of `width` pixels, shifted left at the
+/// right image border: [start, stop), the caller masks out the lanes outside [begin, end). A
+/// scalar remainder loop would cost as much as the vector part on the short spans and runs of
+/// superpixels. False if the row is narrower than the vectors (then the scalar loops run).
+DASP_ALWAYS_INLINE bool coverSpan(int begin, int end, int width, int& start, int& stop) {
+  const int vectors = (end - begin + kLanes - 1) / kLanes;
+  if (vectors * kLanes > width) return false;
+  start = begin < width - vectors * kLanes ? begin : width - vectors * kLanes;
+  stop = start + vectors * kLanes;
+  return true;
+}
+
+}  // namespace dasp::detail
