@@ -125,7 +125,10 @@ Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
 }
 
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
-  return DaspSegmenter(config).compute(frame);
+  // Fresh buffers would cost more than the clustering: each call would page in 17 MB again.
+  thread_local DaspSegmenter segmenter;
+  segmenter.setConfig(config);
+  return segmenter.compute(frame);
 }
 
 Superpixels computeAspRgb(const cv::Mat& color, const AspConfig& config) {

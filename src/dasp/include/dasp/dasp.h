@@ -130,6 +130,9 @@ struct Superpixels {
 /// Depth-Adaptive Superpixels (alg. 4). Throws std::invalid_argument for bad input (sizes or
 /// types that do not match, no valid depth, K out of range, intrinsics that are not finite and
 /// positive, nonsensical parameters).
+/// Each calling thread keeps one set of per-pixel working buffers (a DaspSegmenter, about 55
+/// bytes a pixel: 17 MB at 640x480) until it exits, so that repeated calls do not allocate and
+/// page them in again; use a DaspSegmenter of your own to control that memory.
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config = {});
 
 /// DASP on a stream of frames: the same algorithm and result as computeDasp with this config,
@@ -146,6 +149,8 @@ class DaspSegmenter {
   /// Superpixels of one frame; throws std::invalid_argument like computeDasp.
   Superpixels compute(const RgbdFrame& frame);
   const DaspConfig& config() const { return config_; }
+  /// Parameters for the following frames (checked by compute()).
+  void setConfig(const DaspConfig& config) { config_ = config; }
 
  private:
   struct Buffers;
