@@ -31,7 +31,7 @@ endif()
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   set_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp
-    ${CMAKE_CURRENT_SOURCE_DIR}/src/delta_density.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/src/delta_density.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/sampling.cpp
     PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic;-fassociative-math;-fno-signed-zeros")
   # The DALIC kernels pass GCC vector types (vector extensions) between always-inlined helpers;
   # GCC's note that such arguments have another ABI without AVX concerns calls across objects,

@@ -153,9 +153,29 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
                                    std::size_t count, int row_begin, int row_end,
                                    float* __restrict dist, int* __restrict label) {
   const int width = f.width;
-  std::vector<const ClusterTerms*> active;
+  // The reach-disc spans of all clusters, bucketed by row (counting sort, in cluster order
+  // within a row): the row loop below then visits only the clusters that reach the row.
+  const int rows = row_end - row_begin;
+  std::vector<int> row_start(static_cast<std::size_t>(rows) + 1, 0);
   for (std::size_t k = 0; k < count; ++k) {
-    if (terms[k].y1 >= row_begin && terms[k].y0 < row_end) active.push_back(terms + k);
+    const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
+    for (int row = y0; row <= y1; ++row) ++row_start[static_cast<std::size_t>(row - row_begin) + 1];
+  }
+  for (int i = 0; i < rows; ++i) row_start[i + 1] += row_start[i];
+  struct Span {
+    int cluster, x0, x1;
+  };
+  std::vector<Span> spans(static_cast<std::size_t>(row_start[rows]));
+  {
+    std::vector<int> fill(row_start.begin(), row_start.end() - 1);
+    for (std::size_t k = 0; k < count; ++k) {
+      const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
+      for (int row = y0; row <= y1; ++row) {
+        Span& span = spans[static_cast<std::size_t>(fill[row - row_begin]++)];
+        span.cluster = static_cast<int>(k);
+        reachSpan(terms[k], row, span.x0, span.x1);
+      }
+    }
   }
   for (int row = row_begin; row < row_end; ++row) {
     const FeatureRow fr = featureRow(f, row);
@@ -166,12 +186,12 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
       d_row[col] = fr.valid[col] ? kUnreached : kInvalidPixel;
       l_row[col] = -1;
     }
-    for (const ClusterTerms* cluster : active) {
-      if (row < cluster->y0 || row > cluster->y1) continue;
-      const ClusterTerms t = *cluster;  // a copy: the stores below cannot alias it
-      int x0 = 0, x1 = -1;
-      reachSpan(t, row, x0, x1);
+    for (int s = row_start[row - row_begin]; s < row_start[row - row_begin + 1]; ++s) {
+      const int x0 = spans[static_cast<std::size_t>(s)].x0;
+      const int x1 = spans[static_cast<std::size_t>(s)].x1;
       if (x0 > x1) continue;
+      // A copy: the stores below cannot alias it.
+      const ClusterTerms t = terms[spans[static_cast<std::size_t>(s)].cluster];
       const float dv = static_cast<float>(row) - t.v;
       const float dv2 = dv * dv;
 #if DASP_VECTOR_EXTENSIONS
@@ -431,9 +451,18 @@ cv::Mat Dalic::labels() const {
 void Dalic::initialize(const std::vector<Seed>& seeds) {
   const PixelFeatures& f = features_;
   const float* density = density_.ptr<float>();
-  clusters_.clear();
-  clusters_.reserve(seeds.size());
-  for (std::size_t seed_index = 0; seed_index < seeds.size(); ++seed_index) {
+  // Seeds are visited row by row (their windows then share cached rows; in sampling order each
+  // window would be fetched from memory), and the clusters kept in seed order.
+  std::vector<std::pair<int, int>> order(seeds.size());  // (row, seed index)
+  for (std::size_t i = 0; i < seeds.size(); ++i) {
+    order[i] = {std::clamp(static_cast<int>(std::lround(seeds[i].v)), 0, f.height - 1),
+                static_cast<int>(i)};
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<Cluster> initial(seeds.size());
+  std::vector<std::uint8_t> kept(seeds.size(), 0);
+  for (const auto& [row, index] : order) {
+    const std::size_t seed_index = static_cast<std::size_t>(index);
     const Seed& seed = seeds[seed_index];
     const int cx = std::clamp(static_cast<int>(std::lround(seed.u)), 0, f.width - 1);
     const int cy = std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1);
@@ -444,22 +473,33 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
     Cluster c;
     c.u = static_cast<float>(cx);
     c.v = static_cast<float>(cy);
-    c.color.setZero();
-    c.position.setZero();
-    Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
+    // Plain float sums over the window (valid pixels only: invalid ones have zero features
+    // but must not count).
+    float sum[9] = {};
     int count = 0;
+    const bool depth = f.hasDepth();
     for (int y = std::max(0, cy - reach); y <= std::min(f.height - 1, cy + reach); ++y) {
+      const std::size_t base = static_cast<std::size_t>(y) * f.width;
       for (int x = std::max(0, cx - reach); x <= std::min(f.width - 1, cx + reach); ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * f.width + x;
-        if (!f.valid[i]) continue;
-        ++count;
-        c.color += Eigen::Vector3f(f.r[i], f.g[i], f.b[i]);
-        if (f.hasDepth()) {
-          c.position += Eigen::Vector3f(f.x[i], f.y[i], f.z[i]);
-          normal_sum += Eigen::Vector3f(f.nx[i], f.ny[i], f.nz[i]);
+        const std::size_t i = base + x;
+        const float w = f.valid[i] ? 1.0f : 0.0f;
+        count += f.valid[i];
+        sum[0] += w * f.r[i];
+        sum[1] += w * f.g[i];
+        sum[2] += w * f.b[i];
+        if (depth) {  // invalid pixels have zero points and normals
+          sum[3] += f.x[i];
+          sum[4] += f.y[i];
+          sum[5] += f.z[i];
+          sum[6] += f.nx[i];
+          sum[7] += f.ny[i];
+          sum[8] += f.nz[i];
         }
       }
     }
+    const Eigen::Vector3f normal_sum(sum[6], sum[7], sum[8]);
+    c.color = Eigen::Vector3f(sum[0], sum[1], sum[2]);
+    c.position = Eigen::Vector3f(sum[3], sum[4], sum[5]);
     if (count == 0) continue;  // seed without any valid pixel nearby: drop it
     c.color /= static_cast<float>(count);
     c.position /= static_cast<float>(count);
@@ -468,7 +508,12 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
     c.radius_px = Impl::radiusPx(*this, c.position.z(), seed_density);
     c.mass = 1.0f;
     c.origin = static_cast<int>(seed_index);
-    clusters_.push_back(c);
+    initial[seed_index] = c;
+    kept[seed_index] = 1;
+  }
+  clusters_.clear();
+  for (std::size_t i = 0; i < seeds.size(); ++i) {
+    if (kept[i]) clusters_.push_back(initial[i]);
   }
 }
 

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -13,14 +14,16 @@ namespace {
 void requireDensity(const cv::Mat& density) {
   if (density.empty()) throw std::invalid_argument("sampling: density is empty");
   if (density.type() != CV_32FC1) throw std::invalid_argument("sampling: density must be CV_32FC1");
-  double min_value = 0.0, max_value = 0.0;
-  cv::minMaxLoc(density, &min_value, &max_value);
-  if (!std::isfinite(min_value) || !std::isfinite(max_value) || min_value < 0.0) {
-    throw std::invalid_argument("sampling: density must be finite and >= 0");
+  // One pass: NaN, infinity and negative values all fail 0 <= value <= FLT_MAX.
+  int unusable = 0;
+  for (int row = 0; row < density.rows; ++row) {
+    const float* p = density.ptr<float>(row);
+    for (int col = 0; col < density.cols; ++col) {
+      unusable += (p[col] >= 0.0f) & (p[col] <= std::numeric_limits<float>::max()) ? 0 : 1;
+    }
   }
-  // minMaxLoc ignores NaN; check explicitly.
-  if (cv::checkRange(density, true) == false) {
-    throw std::invalid_argument("sampling: density contains NaN or infinity");
+  if (unusable > 0) {
+    throw std::invalid_argument("sampling: density must be finite and >= 0 (no NaN or infinity)");
   }
 }
 
@@ -143,11 +146,21 @@ DensityPyramid::DensityPyramid(const cv::Mat& density) {
   level_.push_back(base);
   while (level_.back().rows > 1 || level_.back().cols > 1) {
     const cv::Mat& fine = level_.back();
-    cv::Mat coarse = cv::Mat::zeros((fine.rows + 1) / 2, (fine.cols + 1) / 2, CV_64F);
-    for (int row = 0; row < fine.rows; ++row) {
-      const double* src = fine.ptr<double>(row);
-      double* dst = coarse.ptr<double>(row / 2);
-      for (int col = 0; col < fine.cols; ++col) dst[col / 2] += src[col];
+    cv::Mat coarse((fine.rows + 1) / 2, (fine.cols + 1) / 2, CV_64F);
+    const int pairs = fine.cols / 2;  // full 2x2 blocks per row pair; an odd column is added last
+    for (int row = 0; row < coarse.rows; ++row) {
+      const double* top = fine.ptr<double>(2 * row);
+      const double* bottom = 2 * row + 1 < fine.rows ? fine.ptr<double>(2 * row + 1) : nullptr;
+      double* dst = coarse.ptr<double>(row);
+      // Summed in the order top left, top right, bottom left, bottom right.
+      for (int col = 0; col < pairs; ++col) dst[col] = top[2 * col] + top[2 * col + 1];
+      if (fine.cols % 2 != 0) dst[pairs] = top[fine.cols - 1];
+      if (bottom != nullptr) {
+        for (int col = 0; col < pairs; ++col) {
+          dst[col] = dst[col] + bottom[2 * col] + bottom[2 * col + 1];
+        }
+        if (fine.cols % 2 != 0) dst[pairs] += bottom[fine.cols - 1];
+      }
     }
     level_.push_back(coarse);
   }
