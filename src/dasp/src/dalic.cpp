@@ -42,8 +42,8 @@ constexpr float kMinPlaneSpread = 0.01f;
 constexpr float kInvalidPixel = -std::numeric_limits<float>::max();
 
 // Accumulators per cluster, sums relative to the cluster's previous centre. The pixel-position
-// sums of a run of pixels have closed forms (one float each); the feature sums are kept per
-// vector lane (kLanes floats each) and added up across lanes once per update.
+// sums of a run of pixels have closed forms; the feature sums of a run are summed in vector
+// lanes, and the lanes of all sums are added up together at the end of the run.
 enum RunAcc : int { kCount, kSu, kSv, kSuu, kSvv, kSuv, kRunAccSize };
 enum LaneAcc : int {
   kSr,
@@ -61,7 +61,8 @@ enum LaneAcc : int {
   kSzz,
   kLaneAccSize
 };
-constexpr int kClusterAccSize = kRunAccSize + kLaneAccSize * kLanes;  // floats per cluster
+constexpr int kFeatureSlots = 2 * kLanes;  // kLaneAccSize sums padded to whole vectors
+constexpr int kClusterAccSize = kRunAccSize + kFeatureSlots;  // floats per cluster
 
 // Per-cluster constants of the distance, precomputed once per assign(). The distance is
 // expanded, |f - f_i|^2 = |f|^2 - 2 f . f_i + |f_i|^2 for colour and (d_DA) 3D position, and
@@ -244,8 +245,26 @@ DASP_VECTOR_CLONES void assignRowsColorDepth2D(const PixelFeatures& f, const Clu
   assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label);
 }
 
+#if DASP_VECTOR_EXTENSIONS
+// Lane-wise sums of pairs: (a0 + a1, a2 + a3, b0 + b1, b2 + b3, a4 + a5, a6 + a7, b4 + b5, b6 + b7)
+// (one vhaddps on AVX).
+DASP_ALWAYS_INLINE Vec8f pairSums(const Vec8f& a, const Vec8f& b) {
+  return __builtin_shuffle(a, b, Vec8i{0, 2, 8, 10, 4, 6, 12, 14}) +
+         __builtin_shuffle(a, b, Vec8i{1, 3, 9, 11, 5, 7, 13, 15});
+}
+
+// The lane totals of eight vectors: (sum of v[0], ..., sum of v[7]).
+DASP_ALWAYS_INLINE Vec8f laneTotals(const Vec8f* v) {
+  const Vec8f low = pairSums(pairSums(v[0], v[1]), pairSums(v[2], v[3]));   // v0..v3, halves
+  const Vec8f high = pairSums(pairSums(v[4], v[5]), pairSums(v[6], v[7]));  // v4..v7, halves
+  return __builtin_shuffle(low, high, Vec8i{0, 1, 2, 3, 8, 9, 10, 11}) +
+         __builtin_shuffle(low, high, Vec8i{4, 5, 6, 7, 12, 13, 14, 15});
+}
+#endif
+
 // Adds the features of the pixels [begin, end) of one row, all of one cluster, to the
-// cluster's lane accumulators (LaneAcc, kLanes floats each). Positions relative to (rx, ry, rz).
+// cluster's feature sums (LaneAcc order, kFeatureSlots floats). Positions relative to
+// (rx, ry, rz).
 template <bool kDepth>
 DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density, int width,
                                       int begin, int end, float rx, float ry, float rz,
@@ -254,9 +273,7 @@ DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density
   {
     int start = 0, stop = 0;
     if (coverSpan(begin, end, width, start, stop)) {
-      constexpr int kUsed = kDepth ? kLaneAccSize : kSx;
-      Vec8f sum[kUsed];
-      for (int q = 0; q < kUsed; ++q) sum[q] = loadVec<Vec8f>(acc + q * kLanes);
+      Vec8f sum[kFeatureSlots] = {};
       Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
       const Vec8f zero{};
       for (int c = start; c < stop; c += kLanes, col += kLanes) {
@@ -280,27 +297,30 @@ DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density
           sum[kSzz] += dz * dz;
         }
       }
-      for (int q = 0; q < kUsed; ++q) storeVec(acc + q * kLanes, sum[q]);
+      storeVec(acc, loadVec<Vec8f>(acc) + laneTotals(sum));
+      if constexpr (kDepth) {
+        storeVec(acc + kLanes, loadVec<Vec8f>(acc + kLanes) + laneTotals(sum + kLanes));
+      }
       return;
     }
   }
 #endif
-  for (int col = begin; col < end; ++col) {  // lane 0 only
-    acc[kSr * kLanes] += fr.r[col];
-    acc[kSg * kLanes] += fr.g[col];
-    acc[kSb * kLanes] += fr.b[col];
-    acc[kMass * kLanes] += density[col];
+  for (int col = begin; col < end; ++col) {
+    acc[kSr] += fr.r[col];
+    acc[kSg] += fr.g[col];
+    acc[kSb] += fr.b[col];
+    acc[kMass] += density[col];
     if constexpr (kDepth) {
       const float dx = fr.x[col] - rx, dy = fr.y[col] - ry, dz = fr.z[col] - rz;
-      acc[kSx * kLanes] += dx;
-      acc[kSy * kLanes] += dy;
-      acc[kSz * kLanes] += dz;
-      acc[kSxx * kLanes] += dx * dx;
-      acc[kSxy * kLanes] += dx * dy;
-      acc[kSxz * kLanes] += dx * dz;
-      acc[kSyy * kLanes] += dy * dy;
-      acc[kSyz * kLanes] += dy * dz;
-      acc[kSzz * kLanes] += dz * dz;
+      acc[kSx] += dx;
+      acc[kSy] += dy;
+      acc[kSz] += dz;
+      acc[kSxx] += dx * dx;
+      acc[kSxy] += dx * dy;
+      acc[kSxz] += dx * dz;
+      acc[kSyy] += dy * dy;
+      acc[kSyz] += dy * dz;
+      acc[kSzz] += dz * dz;
     }
   }
 }
@@ -585,17 +605,13 @@ void Dalic::update() {
   std::vector<Cluster> next;
   next.reserve(k_count + static_cast<std::size_t>(std::max(0, params_.target_count)));
   for (std::size_t k = 0; k < k_count; ++k) {
-    // This cluster's sums over the chunks (in chunk order) and lanes.
+    // This cluster's sums over the chunks (in chunk order).
     float a[kRunAccSize + kLaneAccSize] = {};
     for (int chunk = 0; chunk < kUpdateChunks; ++chunk) {
       const float* src =
           accumulators_.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
       for (int q = 0; q < kRunAccSize; ++q) a[q] += src[q];
-      for (int q = 0; q < kLaneAccSize; ++q) {
-        float lanes = 0.0f;
-        for (int lane = 0; lane < kLanes; ++lane) lanes += src[kRunAccSize + q * kLanes + lane];
-        a[kRunAccSize + q] += lanes;
-      }
+      for (int q = 0; q < kLaneAccSize; ++q) a[kRunAccSize + q] += src[kRunAccSize + q];
     }
     const float n = a[kCount];
     if (n <= 0.0f || a[kRunAccSize + kMass] < params_.min_size_fraction) continue;  // purge
