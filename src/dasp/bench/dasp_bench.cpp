@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -185,13 +186,33 @@ BENCHMARK(BM_DaspPixels)
     ->DenseRange(2, 8, 2)
     ->Unit(benchmark::kMillisecond);
 
-// Runtime against K at 640x480: flat.
+// Runtime against K at 640x480 (the bar: flat).
 void BM_DaspCount(benchmark::State& state) {
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(state.range(0));
   for (auto _ : state) benchmark::DoNotOptimize(computeDasp(frame(), c));
 }
 BENCHMARK(BM_DaspCount)
+    ->ArgName("K")
+    ->Arg(250)
+    ->Arg(500)
+    ->Arg(1000)
+    ->Arg(2000)
+    ->Arg(4000)
+    ->Unit(benchmark::kMillisecond);
+
+// The peer against K: OpenCV SLIC (10 iterations) with the region size for about K superpixels.
+void BM_OpenCvSlicCount(benchmark::State& state) {
+  const int previous = cv::getNumThreads();
+  cv::setNumThreads(1);
+  const int region = static_cast<int>(
+      std::lround(std::sqrt(static_cast<double>(frame().color.total()) / state.range(0))));
+  int count = 0;
+  for (auto _ : state) count = bench::runOpenCvSlic(frame().color, region);
+  cv::setNumThreads(previous);
+  state.counters["superpixels"] = count;
+}
+BENCHMARK(BM_OpenCvSlicCount)
     ->ArgName("K")
     ->Arg(250)
     ->Arg(500)
@@ -268,6 +289,34 @@ int main(int argc, char** argv) {
   if (dasp0 > 0 && slic0 > 0) {
     std::printf("ratio DASP / OpenCV SLIC, all cores: %.3f (%.2f ms / %.2f ms)\n", dasp0 / slic0,
                 dasp0, slic0);
+  }
+  // Runtime against K and against the pixel count, relative to K = 1000 and to full size.
+  const double dasp_k1000 = find("BM_DaspCount/K:1000"),
+               slic_k1000 = find("BM_OpenCvSlicCount/K:1000");
+  if (dasp_k1000 > 0) {
+    std::printf("runtime against K (single-threaded, relative to K = 1000):\n");
+    for (int k : {250, 500, 1000, 2000, 4000}) {
+      const double dasp_k = find("BM_DaspCount/K:" + std::to_string(k));
+      const double slic_k = find("BM_OpenCvSlicCount/K:" + std::to_string(k));
+      if (dasp_k <= 0) continue;
+      std::printf("  K = %4d: DASP %6.2f ms (x%.2f)", k, dasp_k, dasp_k / dasp_k1000);
+      if (slic_k > 0 && slic_k1000 > 0) {
+        std::printf(", OpenCV SLIC %7.2f ms (x%.2f), DASP / SLIC %.3f", slic_k, slic_k / slic_k1000,
+                    dasp_k / slic_k);
+      }
+      std::printf("\n");
+    }
+  }
+  const double full = find("BM_DaspPixels/quarter_scale:4");
+  if (full > 0) {
+    std::printf("runtime against pixel count (K scaled with it, relative to 640x480):\n");
+    for (int q : {2, 4, 6, 8}) {
+      const double t = find("BM_DaspPixels/quarter_scale:" + std::to_string(q));
+      if (t <= 0) continue;
+      const double pixels = q * q / 16.0;
+      std::printf("  %.2fx the pixels: %7.2f ms, time x%.2f, time per pixel x%.2f\n", pixels, t,
+                  t / full, t / full / pixels);
+    }
   }
   benchmark::Shutdown();
   return 0;

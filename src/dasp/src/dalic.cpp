@@ -11,8 +11,6 @@
 #include <type_traits>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
-
 #include "dasp/stages.h"
 #include "parallel.h"
 #include "simd.h"
@@ -38,6 +36,7 @@ constexpr float kUnreached = 1e30f;
 // A cluster's points define a plane if their second principal variance is at least this
 // fraction of the first (a strip two pixels wide gives about 0.03).
 constexpr float kMinPlaneSpread = 0.01f;
+constexpr int kNormalSteps = 4;  // power-iteration steps of the plane normal
 // Distance of pixels no cluster may take (the reduced distances of ClusterTerms can be < 0).
 constexpr float kInvalidPixel = -std::numeric_limits<float>::max();
 
@@ -394,6 +393,34 @@ DASP_VECTOR_CLONES void accumulateRowsColor(const PixelFeatures& f, const float*
   accumulateRows<false>(f, density, labels, clusters, row_begin, row_end, acc);
 }
 
+// Plane normal of a cluster (eq. 3.22): the eigenvector of the smallest eigenvalue l0 of the
+// points' covariance. It is the dominant eigenvector of the adjugate (eigenvalues l1 l2 >=
+// l0 l2 >= l0 l1), found by power iteration from the cluster's previous normal; each step
+// shrinks the error by l0 / l1, which is tiny on the nearly flat patches superpixels are, so a
+// few steps replace a full eigendecomposition (the per-cluster cost that would make DASP's
+// runtime grow with K). Points on a line (a superpixel squeezed into one pixel column, as on
+// steep surfaces at the image border; l1 under about 1 % of l2) define no plane: their "normal"
+// would be any direction across the line and push every pixel away, so `normal` is kept.
+void planeNormal(const Eigen::Matrix3f& cov, Eigen::Vector3f& normal) {
+  const float a = cov(0, 0), b = cov(0, 1), c = cov(0, 2), d = cov(1, 1), e = cov(1, 2),
+              f = cov(2, 2);
+  Eigen::Matrix3f adjugate;
+  adjugate << d * f - e * e, c * e - b * f, b * e - c * d,  //
+      c * e - b * f, a * f - c * c, b * c - a * e,          //
+      b * e - c * d, b * c - a * e, a * d - b * b;
+  const float trace = a + d + f;                  // l0 + l1 + l2
+  const float adjugate_trace = adjugate.trace();  // l0 l1 + l0 l2 + l1 l2, about l1 l2
+  if (!(adjugate_trace > kMinPlaneSpread * trace * trace)) return;
+  Eigen::Vector3f x = normal;
+  for (int step = 0; step < kNormalSteps; ++step) {
+    x = adjugate * x;
+    const float length = x.norm();
+    if (!(length > 0.0f) || !std::isfinite(length)) return;  // start orthogonal to the normal
+    x /= length;
+  }
+  normal = x;
+}
+
 }  // namespace
 
 struct Dalic::Impl {
@@ -649,14 +676,7 @@ void Dalic::update() {
             a[kRunAccSize + kSxz] * inv_n, a[kRunAccSize + kSyz] * inv_n,
             a[kRunAccSize + kSzz] * inv_n;
         cov -= mean * mean.transpose();
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver;
-        solver.computeDirect(cov);
-        // Smallest eigenvalue: plane normal (eq. 3.22). Points on a line (a superpixel squeezed
-        // into one pixel column, as on steep surfaces at the image border) define no plane:
-        // their "normal" would be any direction across the line and the normal term would
-        // push every pixel away, so the previous normal is kept.
-        const Eigen::Vector3f lambda = solver.eigenvalues();  // ascending
-        if (lambda(1) > kMinPlaneSpread * lambda(2)) c.normal = solver.eigenvectors().col(0);
+        planeNormal(cov, c.normal);
       }  // else: too few points for a plane fit, keep the previous normal
       if (!(c.normal.norm() > 0.0f) || !c.normal.allFinite()) c.normal = -Eigen::Vector3f::UnitZ();
       c.normal.normalize();
