@@ -152,30 +152,37 @@ DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load,
 template <MetricKind kKind>
 DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* terms,
                                    std::size_t count, int row_begin, int row_end,
-                                   float* __restrict dist, int* __restrict label) {
+                                   float* __restrict dist, int* __restrict label,
+                                   std::vector<int>& scratch) {
   const int width = f.width;
   // The reach-disc spans of all clusters, bucketed by row (counting sort, in cluster order
   // within a row): the row loop below then visits only the clusters that reach the row.
+  // scratch (kept across calls: no allocation or clearing per frame) holds the row starts, the
+  // fill positions and the spans (cluster, x0, x1).
   const int rows = row_end - row_begin;
-  std::vector<int> row_start(static_cast<std::size_t>(rows) + 1, 0);
+  std::size_t total = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
-    for (int row = y0; row <= y1; ++row) ++row_start[static_cast<std::size_t>(row - row_begin) + 1];
+    total += static_cast<std::size_t>(std::max(0, y1 - y0 + 1));
+  }
+  const std::size_t needed = 2 * static_cast<std::size_t>(rows) + 1 + 3 * total;
+  if (scratch.size() < needed) scratch.resize(needed);
+  int* row_start = scratch.data();
+  int* fill = row_start + rows + 1;
+  int* spans = fill + rows;
+  std::fill(row_start, row_start + rows + 1, 0);
+  for (std::size_t k = 0; k < count; ++k) {
+    const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
+    for (int row = y0; row <= y1; ++row) ++row_start[row - row_begin + 1];
   }
   for (int i = 0; i < rows; ++i) row_start[i + 1] += row_start[i];
-  struct Span {
-    int cluster, x0, x1;
-  };
-  std::vector<Span> spans(static_cast<std::size_t>(row_start[rows]));
-  {
-    std::vector<int> fill(row_start.begin(), row_start.end() - 1);
-    for (std::size_t k = 0; k < count; ++k) {
-      const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
-      for (int row = y0; row <= y1; ++row) {
-        Span& span = spans[static_cast<std::size_t>(fill[row - row_begin]++)];
-        span.cluster = static_cast<int>(k);
-        reachSpan(terms[k], row, span.x0, span.x1);
-      }
+  std::copy(row_start, row_start + rows, fill);
+  for (std::size_t k = 0; k < count; ++k) {
+    const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
+    for (int row = y0; row <= y1; ++row) {
+      int* span = spans + 3 * fill[row - row_begin]++;
+      span[0] = static_cast<int>(k);
+      reachSpan(terms[k], row, span[1], span[2]);
     }
   }
   for (int row = row_begin; row < row_end; ++row) {
@@ -188,11 +195,10 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
       l_row[col] = -1;
     }
     for (int s = row_start[row - row_begin]; s < row_start[row - row_begin + 1]; ++s) {
-      const int x0 = spans[static_cast<std::size_t>(s)].x0;
-      const int x1 = spans[static_cast<std::size_t>(s)].x1;
+      const int* span = spans + 3 * s;
+      const int x0 = span[1], x1 = span[2];
       if (x0 > x1) continue;
-      // A copy: the stores below cannot alias it.
-      const ClusterTerms t = terms[spans[static_cast<std::size_t>(s)].cluster];
+      const ClusterTerms t = terms[span[0]];  // a copy: the stores below cannot alias it
       const float dv = static_cast<float>(row) - t.v;
       const float dv2 = dv * dv;
 #if DASP_VECTOR_EXTENSIONS
@@ -228,20 +234,21 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
 
 DASP_VECTOR_CLONES void assignRowsDepthAdaptive(const PixelFeatures& f, const ClusterTerms* terms,
                                                 std::size_t count, int row_begin, int row_end,
-                                                float* dist, int* label) {
-  assignRows<MetricKind::kDepthAdaptive>(f, terms, count, row_begin, row_end, dist, label);
+                                                float* dist, int* label,
+                                                std::vector<int>& scratch) {
+  assignRows<MetricKind::kDepthAdaptive>(f, terms, count, row_begin, row_end, dist, label, scratch);
 }
 
 DASP_VECTOR_CLONES void assignRowsColor2D(const PixelFeatures& f, const ClusterTerms* terms,
                                           std::size_t count, int row_begin, int row_end,
-                                          float* dist, int* label) {
-  assignRows<MetricKind::kColor2D>(f, terms, count, row_begin, row_end, dist, label);
+                                          float* dist, int* label, std::vector<int>& scratch) {
+  assignRows<MetricKind::kColor2D>(f, terms, count, row_begin, row_end, dist, label, scratch);
 }
 
 DASP_VECTOR_CLONES void assignRowsColorDepth2D(const PixelFeatures& f, const ClusterTerms* terms,
                                                std::size_t count, int row_begin, int row_end,
-                                               float* dist, int* label) {
-  assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label);
+                                               float* dist, int* label, std::vector<int>& scratch) {
+  assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label, scratch);
 }
 
 #if DASP_VECTOR_EXTENSIONS
@@ -593,16 +600,18 @@ void Dalic::assign() {
   const std::size_t count = terms.size();
   float* dist = distance_.data();
   int* label = labels_.data();
-  detail::forChunks(f.height, kChunks, params_.threads, [&](int, int row_begin, int row_end) {
+  span_scratch_.resize(kChunks);
+  detail::forChunks(f.height, kChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
+    std::vector<int>& scratch = span_scratch_[static_cast<std::size_t>(chunk)];
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
-        assignRowsDepthAdaptive(f, t, count, row_begin, row_end, dist, label);
+        assignRowsDepthAdaptive(f, t, count, row_begin, row_end, dist, label, scratch);
         break;
       case MetricKind::kColor2D:
-        assignRowsColor2D(f, t, count, row_begin, row_end, dist, label);
+        assignRowsColor2D(f, t, count, row_begin, row_end, dist, label, scratch);
         break;
       case MetricKind::kColorDepth2D:
-        assignRowsColorDepth2D(f, t, count, row_begin, row_end, dist, label);
+        assignRowsColorDepth2D(f, t, count, row_begin, row_end, dist, label, scratch);
         break;
     }
   });

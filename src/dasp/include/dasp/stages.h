@@ -167,6 +167,7 @@ class Dalic {
   std::vector<int> labels_;
   std::vector<float> distance_;
   std::vector<float> accumulators_;
+  std::vector<std::vector<int>> span_scratch_;  // per row stripe of assign()
 };
 
 /// Makes every label 4-connected: for each label the largest piece keeps it if its weight (sum
