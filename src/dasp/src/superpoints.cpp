@@ -1,17 +1,304 @@
 // Connectivity enforcement and the superpoint fit (thesis §3.2.3).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
 
 #include "dasp/stages.h"
-#include "point_moments.h"
+#include "simd.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace dasp {
 namespace {
 constexpr double kPiD = 3.14159265358979323846;
+
+// ---------------------------------------------------------------------------------------------
+// Float sums along a run of pixels in a fixed order: for runs of 4 or more pixels, four lanes
+// (lane j sums the pixels j, j + 4, ...), the lanes reduced as (l0 + l2) + (l1 + l3), then the
+// 0-3 remaining pixels one after the other; shorter runs one after the other. This is the order
+// of the vectorised loops these sums used to be (GCC, SSE2 baseline), so the superpoints and the
+// piece weights are bit-identical to before; the loops are written out to fuse the 16 sums of the
+// fit into one pass and to keep the order independent of what the vectoriser picks.
+// ---------------------------------------------------------------------------------------------
+#if defined(__GNUC__)
+typedef float Lanes4 __attribute__((vector_size(16)));
+inline Lanes4 load4(const float* p) {
+  Lanes4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline Lanes4 splat4(float f) { return Lanes4{f, f, f, f}; }
+inline float lane(const Lanes4& v, int i) { return v[i]; }
+#else
+struct Lanes4 {
+  float v[4];
+  Lanes4& operator+=(const Lanes4& o) {
+    for (int i = 0; i < 4; ++i) v[i] += o.v[i];
+    return *this;
+  }
+  friend Lanes4 operator-(Lanes4 a, const Lanes4& b) {
+    for (int i = 0; i < 4; ++i) a.v[i] -= b.v[i];
+    return a;
+  }
+  friend Lanes4 operator*(Lanes4 a, const Lanes4& b) {
+    for (int i = 0; i < 4; ++i) a.v[i] *= b.v[i];
+    return a;
+  }
+};
+inline Lanes4 load4(const float* p) { return Lanes4{{p[0], p[1], p[2], p[3]}}; }
+inline Lanes4 splat4(float f) { return Lanes4{{f, f, f, f}}; }
+inline float lane(const Lanes4& v, int i) { return v.v[i]; }
+#endif
+// Keeps the compiler from reassociating the float operations around v (the build allows it).
+inline void pinOrder(float& v) {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+  __asm__("" : "+x"(v));
+#elif defined(__GNUC__)
+  __asm__("" : "+r"(v));
+#else
+  (void)v;
+#endif
+}
+inline float reduce4(const Lanes4& v) {
+  float even = lane(v, 0) + lane(v, 2), odd = lane(v, 1) + lane(v, 3);
+  pinOrder(even);
+  pinOrder(odd);
+  return even + odd;
+}
+
+// Sum of p[begin, end) (end > begin) in the fixed order above.
+float runSum(const float* p, int begin, int end) {
+  const int n = end - begin;
+  p += begin;
+  if (n < 4) {
+    float s = p[0];
+    if (n > 1) {
+      s += p[1];
+      if (n > 2) s += p[2];
+    }
+    return s;
+  }
+  const int body = n & ~3;
+  Lanes4 acc = splat4(0.0f);
+  for (int i = 0; i < body; i += 4) acc += load4(p + i);
+  float s = reduce4(acc);
+  if (body < n) {
+    s += p[body];
+    if (body + 1 < n) {
+      s += p[body + 1];
+      if (body + 2 < n) s += p[body + 2];
+    }
+  }
+  return s;
+}
+
+// Rows of the features the superpoint fit sums.
+struct FitRow {
+  const float *r, *g, *b, *rho, *x, *y, *z, *nx, *ny, *nz;
+};
+
+enum FitSum {
+  kR,
+  kG,
+  kB,
+  kDensity,
+  kX,
+  kY,
+  kZ,
+  kXX,
+  kXY,
+  kXZ,
+  kYY,
+  kYZ,
+  kZZ,
+  kNx,
+  kNy,
+  kNz,
+  kFitSums
+};
+
+// The fit's float sums over the pixels [begin, end) of one row (positions relative to r*), in
+// the fixed order of runSum.
+template <bool kDepth, bool kRho>
+inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, float rz,
+                       float* out) {
+  constexpr int kUsed = kDepth ? kFitSums : kX;
+  const auto add_pixel = [&](int i, bool first_tail) {
+    out[kR] += f.r[i];
+    out[kG] += f.g[i];
+    out[kB] += f.b[i];
+    if constexpr (kRho) out[kDensity] += f.rho[i];
+    if constexpr (kDepth) {
+      const float dx = f.x[i] - rx, dy = f.y[i] - ry, dz = f.z[i] - rz;
+      if (first_tail) {
+        // The first pixel after the four-lane part: the vectorised loop this replaces summed the
+        // x and y offsets of that pixel as (sum - r) + p.
+        float sx = out[kX] - rx, sy = out[kY] - ry;
+        pinOrder(sx);
+        pinOrder(sy);
+        out[kX] = sx + f.x[i];
+        out[kY] = sy + f.y[i];
+      } else {
+        out[kX] += dx;
+        out[kY] += dy;
+      }
+      out[kZ] += dz;
+      out[kXX] += dx * dx;
+      out[kXY] += dx * dy;
+      out[kXZ] += dx * dz;
+      out[kYY] += dy * dy;
+      out[kYZ] += dy * dz;
+      out[kZZ] += dz * dz;
+      out[kNx] += f.nx[i];
+      out[kNy] += f.ny[i];
+      out[kNz] += f.nz[i];
+    }
+  };
+  for (int q = 0; q < kFitSums; ++q) out[q] = 0.0f;
+  const int n = end - begin;
+  if (n < 4) {
+    add_pixel(begin, false);
+    if (n > 1) {
+      add_pixel(begin + 1, false);
+      if (n > 2) add_pixel(begin + 2, false);
+    }
+    return;
+  }
+  const int body_end = begin + (n & ~3);
+  Lanes4 acc[kUsed];
+  for (int q = 0; q < kUsed; ++q) acc[q] = splat4(0.0f);
+  const Lanes4 vrx = splat4(rx), vry = splat4(ry), vrz = splat4(rz);
+  for (int i = begin; i < body_end; i += 4) {
+    acc[kR] += load4(f.r + i);
+    acc[kG] += load4(f.g + i);
+    acc[kB] += load4(f.b + i);
+    if constexpr (kRho) acc[kDensity] += load4(f.rho + i);
+    if constexpr (kDepth) {
+      const Lanes4 dx = load4(f.x + i) - vrx, dy = load4(f.y + i) - vry, dz = load4(f.z + i) - vrz;
+      acc[kX] += dx;
+      acc[kY] += dy;
+      acc[kZ] += dz;
+      acc[kXX] += dx * dx;
+      acc[kXY] += dx * dy;
+      acc[kXZ] += dx * dz;
+      acc[kYY] += dy * dy;
+      acc[kYZ] += dy * dz;
+      acc[kZZ] += dz * dz;
+      acc[kNx] += load4(f.nx + i);
+      acc[kNy] += load4(f.ny + i);
+      acc[kNz] += load4(f.nz + i);
+    }
+  }
+  for (int q = 0; q < kUsed; ++q) {
+    if (kRho || q != kDensity) out[q] = reduce4(acc[q]);
+  }
+  if (body_end < end) {
+    add_pixel(body_end, true);
+    if (body_end + 1 < end) {
+      add_pixel(body_end + 1, false);
+      if (body_end + 2 < end) add_pixel(body_end + 2, false);
+    }
+  }
+}
+
+// First column in [col, width) whose label differs from k (width if none).
+inline int runEnd(const int* l, int col, int width, int k) {
+#if defined(__SSE2__)
+  const __m128i key = _mm_set1_epi32(k);
+  while (col + 4 <= width) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(l + col));
+    const int same = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v, key)));
+    if (same != 0xF) return col + __builtin_ctz(~same);
+    col += 4;
+  }
+#endif
+  while (col < width && l[col] == k) ++col;
+  return col;
+}
+
+struct FitTotals {
+  double n = 0, u = 0, v = 0, density = 0;
+  Eigen::Vector3d color = Eigen::Vector3d::Zero();
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d reference = Eigen::Vector3d::Zero();  // first point, for precision
+};
+
+// Runs of equal labels are summed in float registers (relative to the label's first point),
+// then added to the double totals. Returns the largest label seen.
+template <bool kDepth, bool kRho>
+int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const float* rho,
+                  std::vector<FitTotals>& sums) {
+  const int width = labels.cols;
+  int max_label = -1;
+  for (int row = 0; row < labels.rows; ++row) {
+    const int* l = labels.ptr<int>(row);
+    const std::size_t base = static_cast<std::size_t>(row) * features.width;
+    FitRow f{};
+    f.r = features.r.data() + base;
+    f.g = features.g.data() + base;
+    f.b = features.b.data() + base;
+    if constexpr (kRho) f.rho = rho + base;
+    if constexpr (kDepth) {
+      f.x = features.x.data() + base;
+      f.y = features.y.data() + base;
+      f.z = features.z.data() + base;
+      f.nx = features.nx.data() + base;
+      f.ny = features.ny.data() + base;
+      f.nz = features.nz.data() + base;
+    }
+    int col = 0;
+    while (col < width) {
+      const int k = l[col];
+      const int end = runEnd(l, col + 1, width, k);
+      if (k >= 0) {
+        if (k > max_label) {
+          max_label = k;
+          if (static_cast<std::size_t>(k) >= sums.size()) {
+            sums.resize(std::max(static_cast<std::size_t>(k) + 1, 2 * sums.size()));
+          }
+        }
+        FitTotals& s = sums[static_cast<std::size_t>(k)];
+        if (kDepth && s.n == 0.0) s.reference = Eigen::Vector3d(f.x[col], f.y[col], f.z[col]);
+        const double run = end - col;
+        s.n += run;
+        s.u += 0.5 * run * (col + end - 1);
+        s.v += run * row;
+        float m[kFitSums];
+        fitRunSums<kDepth, kRho>(f, col, end, static_cast<float>(s.reference.x()),
+                                 static_cast<float>(s.reference.y()),
+                                 static_cast<float>(s.reference.z()), m);
+        s.color += Eigen::Vector3d(m[kR], m[kG], m[kB]);
+        s.density += kRho ? m[kDensity] : 0.0f;
+        if constexpr (kDepth) {
+          s.position += Eigen::Vector3d(m[kX], m[kY], m[kZ]);
+          double* c = s.scatter.data();  // symmetric: column-major = row-major
+          c[0] += m[kXX];
+          c[1] += m[kXY];
+          c[2] += m[kXZ];
+          c[3] += m[kXY];
+          c[4] += m[kYY];
+          c[5] += m[kYZ];
+          c[6] += m[kXZ];
+          c[7] += m[kYZ];
+          c[8] += m[kZZ];
+          s.normal += Eigen::Vector3d(m[kNx], m[kNy], m[kNz]);
+        }
+      }
+      col = end;
+    }
+  }
+  return max_label;
+}
+
 }  // namespace
 
 namespace {
@@ -24,6 +311,86 @@ int findRoot(std::vector<int>& parent, int i) {
   }
   return i;
 }
+
+// Two neighbouring pixels are connected unless a depth jump lies between them.
+inline bool depthConnected(float za, float zb, float ratio) {
+  return std::abs(za - zb) <= ratio * std::min(za, zb);
+}
+
+// Per-pixel run flags of one row: bit 0 = a run starts here (the pixel is not in the run of its
+// left neighbour: first column, other label, unusable left neighbour or depth jump), bit 1 = the
+// pixel is not usable. flags[width .. width + 7] = 1 (sentinels for the scans).
+template <bool kValid, bool kDepth>
+DASP_ALWAYS_INLINE void rowFlags(const int* __restrict l, const std::uint8_t* __restrict ok,
+                                 const float* __restrict z, float ratio, int width,
+                                 std::uint8_t* __restrict flags) {
+  flags[0] = static_cast<std::uint8_t>(1 | (kValid && !ok[0] ? 2 : 0));
+  for (int x = 1; x < width; ++x) {
+    bool start = l[x] != l[x - 1];
+    if constexpr (kValid) start |= ok[x - 1] == 0;
+    if constexpr (kDepth) start |= !depthConnected(z[x - 1], z[x], ratio);
+    int f = start ? 1 : 0;
+    if constexpr (kValid) f |= ok[x] == 0 ? 2 : 0;
+    flags[x] = static_cast<std::uint8_t>(f);
+  }
+  std::memset(flags + width, 1, 8);
+}
+
+DASP_VECTOR_CLONES void rowFlagsAny(const int* l, const std::uint8_t* ok, const float* z,
+                                    float ratio, int width, std::uint8_t* flags) {
+  if (ok != nullptr) {
+    if (z != nullptr) {
+      rowFlags<true, true>(l, ok, z, ratio, width, flags);
+    } else {
+      rowFlags<true, false>(l, ok, z, ratio, width, flags);
+    }
+  } else if (z != nullptr) {
+    rowFlags<false, true>(l, ok, z, ratio, width, flags);
+  } else {
+    rowFlags<false, false>(l, ok, z, ratio, width, flags);
+  }
+}
+
+// Scans of the run flags, eight at a time: the next pixel that starts a run or is unusable
+// (flags != 0; the sentinels stop it), and the next usable pixel (bit 1 clear) before width.
+inline int nextNonZero(const std::uint8_t* flags, int x) {
+#if defined(__GNUC__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  for (;; x += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, flags + x, 8);
+    if (w != 0) return x + __builtin_ctzll(w) / 8;
+  }
+#else
+  while (flags[x] == 0) ++x;
+  return x;
+#endif
+}
+inline int nextUsable(const std::uint8_t* flags, int x, int width) {
+#if defined(__GNUC__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  while (x + 8 <= width) {
+    std::uint64_t w;
+    std::memcpy(&w, flags + x, 8);
+    const std::uint64_t usable = ~w & 0x0202020202020202ull;
+    if (usable != 0) return x + __builtin_ctzll(usable) / 8;
+    x += 8;
+  }
+#endif
+  while (x < width && (flags[x] & 2) != 0) ++x;
+  return x;
+}
+
+struct Run {
+  int row, begin, end, label;
+};
+
+// Working memory of enforceConnectivity, O(runs) (a frame has some 20 000 runs). A thread_local
+// copy measured no faster on a stream of frames, so it is allocated per call.
+struct ConnectivityScratch {
+  std::vector<Run> runs;
+  std::vector<float> run_weight;
+  std::vector<int> row_first, parent, component_of_run, component_of_root;
+  std::vector<std::uint8_t> flags;
+};
 
 }  // namespace
 
@@ -53,44 +420,41 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   const int width = labels.cols;
   const int height = labels.rows;
   int* label = labels.ptr<int>();
-  // Two neighbouring pixels are connected unless a depth jump lies between them.
   const float* z = depth.empty() ? nullptr : depth.ptr<float>();
   const auto connected = [z, depth_jump_ratio](std::size_t a, std::size_t b) {
-    if (z == nullptr) return true;
-    const float za = z[a], zb = z[b];
-    return std::abs(za - zb) <= depth_jump_ratio * std::min(za, zb);
+    return depthConnected(z[a], z[b], depth_jump_ratio);
   };
   const std::uint8_t* ok = valid.empty() ? nullptr : valid.ptr<std::uint8_t>();
   const float* pixel_weight = weight.empty() ? nullptr : weight.ptr<float>();
 
+  ConnectivityScratch w;
+
   // Horizontal runs of equal label over usable pixels; unlabelled usable pixels (-1) form runs
-  // too, which are then merged like stray pieces.
-  struct Run {
-    int row, begin, end, label;
-  };
-  std::vector<Run> runs;
-  runs.reserve(static_cast<std::size_t>(height) * 32);
-  std::vector<int> row_first(static_cast<std::size_t>(height) + 1, 0);
-  std::vector<int> run_of_pixel(labels.total(), -1);
+  // too, which are then merged like stray pieces. The run flags of a row come from one
+  // vectorised pass; the runs are read off them eight flags at a time.
+  std::vector<Run>& runs = w.runs;
+  std::vector<float>& run_weight = w.run_weight;
+  std::vector<int>& row_first = w.row_first;
+  runs.reserve(static_cast<std::size_t>(height) * 48);
+  if (pixel_weight != nullptr) run_weight.reserve(runs.capacity());
+  row_first.assign(static_cast<std::size_t>(height) + 1, 0);
+  w.flags.resize(static_cast<std::size_t>(width) + 8);
+  std::uint8_t* flags = w.flags.data();
   for (int row = 0; row < height; ++row) {
     row_first[static_cast<std::size_t>(row)] = static_cast<int>(runs.size());
     const std::size_t base = static_cast<std::size_t>(row) * width;
+    if (width == 0) continue;
+    rowFlagsAny(label + base, ok == nullptr ? nullptr : ok + base,
+                z == nullptr ? nullptr : z + base, depth_jump_ratio, width, flags);
     int col = 0;
     while (col < width) {
-      if (ok != nullptr && !ok[base + col]) {
-        ++col;
+      if ((flags[col] & 2) != 0) {
+        col = nextUsable(flags, col + 1, width);
         continue;
       }
-      const int value = label[base + col];
-      int end = col + 1;
-      while (end < width && (ok == nullptr || ok[base + end]) && label[base + end] == value &&
-             connected(base + end - 1, base + end)) {
-        ++end;
-      }
-      const int id = static_cast<int>(runs.size());
-      runs.push_back({row, col, end, value});
-      std::fill(run_of_pixel.begin() + static_cast<std::ptrdiff_t>(base + col),
-                run_of_pixel.begin() + static_cast<std::ptrdiff_t>(base + end), id);
+      const int end = nextNonZero(flags, col + 1);
+      runs.push_back({row, col, end, label[base + col]});
+      if (pixel_weight != nullptr) run_weight.push_back(runSum(pixel_weight + base, col, end));
       col = end;
     }
   }
@@ -98,7 +462,8 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   const int run_count = static_cast<int>(runs.size());
 
   // Connect runs of equal label that overlap in consecutive rows (4-neighbourhood).
-  std::vector<int> parent(static_cast<std::size_t>(run_count));
+  std::vector<int>& parent = w.parent;
+  parent.resize(static_cast<std::size_t>(run_count));
   for (int r = 0; r < run_count; ++r) parent[r] = r;
   for (int row = 1; row < height; ++row) {
     int q = row_first[row - 1];
@@ -122,13 +487,16 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     }
   }
   // Components, their pixel weight and their runs (bucketed by component).
-  std::vector<int> component_of_run(static_cast<std::size_t>(run_count));
-  std::vector<int> component_of_root(static_cast<std::size_t>(run_count), -1);
+  std::vector<int>& component_of_run = w.component_of_run;
+  std::vector<int>& component_of_root = w.component_of_root;
+  component_of_run.resize(static_cast<std::size_t>(run_count));
+  component_of_root.assign(static_cast<std::size_t>(run_count), -1);
   std::vector<int> component_label;
   std::vector<double> component_weight;
   std::vector<int> component_size;
   for (int r = 0; r < run_count; ++r) {
-    const int root = findRoot(parent, r);
+    // Roots are the smallest run of their component, so parent[r] < r is already final.
+    const int root = parent[r] == r ? r : parent[r] = parent[parent[r]];
     int& c = component_of_root[root];
     if (c < 0) {
       c = static_cast<int>(component_label.size());
@@ -142,10 +510,7 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     if (pixel_weight == nullptr) {
       component_weight[c] += run.end - run.begin;
     } else {
-      const float* w = pixel_weight + static_cast<std::size_t>(run.row) * width;
-      float sum = 0.0f;
-      for (int x = run.begin; x < run.end; ++x) sum += w[x];
-      component_weight[c] += sum;
+      component_weight[c] += run_weight[r];
     }
   }
   const int component_count = static_cast<int>(component_label.size());
@@ -184,24 +549,44 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   }
 
   // Stray pieces join the resolved neighbour with the longest shared border; repeat while
-  // pieces that only touch other stray pieces get resolved through them.
+  // pieces that only touch other stray pieces get resolved through them. The neighbours of a
+  // run are found among the runs of its own and the adjacent rows (pixels in no run are
+  // unusable and count for nothing).
   std::vector<std::pair<int, int>> border;  // (label, border length)
   // Borders across a depth jump count only for pieces that have no other way to a label.
   bool across_jumps = z == nullptr;
-  const auto tally = [&](int c, std::size_t from, std::size_t pixel) {
-    if (!across_jumps && !connected(from, pixel)) return;
-    const int r = run_of_pixel[pixel];
-    if (r < 0) return;
-    const int other = component_of_run[r];
+  // Adds `length` border pixels of piece c with run `other_run`.
+  const auto tally = [&](int c, int other_run, int length) {
+    const int other = component_of_run[other_run];
     if (other == c) return;
     const int value = final_label[other];
     if (value < 0) return;
     auto it = std::find_if(border.begin(), border.end(),
                            [value](const auto& entry) { return entry.first == value; });
     if (it == border.end()) {
-      border.push_back({value, 1});
+      border.push_back({value, length});
     } else {
-      ++it->second;
+      it->second += length;
+    }
+  };
+  // The border of run r (piece c) with the runs of row `other_row` above or below.
+  const auto tally_row = [&](int c, const Run& run, int other_row) {
+    const int first = row_first[other_row], last = row_first[other_row + 1];
+    int p =
+        static_cast<int>(std::partition_point(runs.begin() + first, runs.begin() + last,
+                                              [&run](const Run& o) { return o.end <= run.begin; }) -
+                         runs.begin());
+    for (; p < last && runs[p].begin < run.end; ++p) {
+      const int begin = std::max(runs[p].begin, run.begin);
+      const int end = std::min(runs[p].end, run.end);
+      int length = end - begin;
+      if (!across_jumps) {
+        const std::size_t base = static_cast<std::size_t>(run.row) * width;
+        const std::size_t other_base = static_cast<std::size_t>(other_row) * width;
+        length = 0;
+        for (int x = begin; x < end; ++x) length += connected(base + x, other_base + x) ? 1 : 0;
+      }
+      if (length > 0) tally(c, p, length);
     }
   };
   bool changed = true;
@@ -212,14 +597,19 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
       if (final_label[c] != kUnresolved) continue;
       border.clear();
       for (int s = stray_start[c]; s < stray_start[c + 1]; ++s) {
-        const Run& run = runs[stray_runs[s]];
+        const int r = stray_runs[s];
+        const Run& run = runs[r];
         const std::size_t base = static_cast<std::size_t>(run.row) * width;
-        if (run.begin > 0) tally(c, base + run.begin, base + run.begin - 1);
-        if (run.end < width) tally(c, base + run.end - 1, base + run.end);
-        for (int x = run.begin; x < run.end; ++x) {
-          if (run.row > 0) tally(c, base + x, base - width + x);
-          if (run.row + 1 < height) tally(c, base + x, base + width + x);
+        if (r > row_first[run.row] && runs[r - 1].end == run.begin &&
+            (across_jumps || connected(base + run.begin, base + run.begin - 1))) {
+          tally(c, r - 1, 1);
         }
+        if (r + 1 < row_first[run.row + 1] && runs[r + 1].begin == run.end &&
+            (across_jumps || connected(base + run.end - 1, base + run.end))) {
+          tally(c, r + 1, 1);
+        }
+        if (run.row > 0) tally_row(c, run, run.row - 1);
+        if (run.row + 1 < height) tally_row(c, run, run.row + 1);
       }
       if (border.empty()) continue;
       auto best = border.begin();
@@ -238,18 +628,26 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
     final_label[c] = component_weight[c] >= min_weight ? next_new_label++ : -1;
   }
 
-  // Renumber 0..m-1 in order of first appearance; pixels outside any run become -1.
+  // Renumber 0..m-1 in order of first appearance; pixels outside any run become -1. One pass
+  // over each row: the gaps between its runs, then each run.
   std::vector<int> renumber(static_cast<std::size_t>(next_new_label), -1);
   int count = 0;
-  std::fill(label, label + labels.total(), -1);
-  for (int r = 0; r < run_count; ++r) {
-    const int value = final_label[component_of_run[r]];
-    if (value < 0) continue;
-    int& mapped = renumber[static_cast<std::size_t>(value)];
-    if (mapped < 0) mapped = count++;
-    const Run& run = runs[r];
-    int* row_labels = label + static_cast<std::size_t>(run.row) * width;
-    std::fill(row_labels + run.begin, row_labels + run.end, mapped);
+  for (int row = 0; row < height; ++row) {
+    int* row_labels = label + static_cast<std::size_t>(row) * width;
+    int x = 0;
+    for (int r = row_first[row]; r < row_first[row + 1]; ++r) {
+      const Run& run = runs[r];
+      std::fill(row_labels + x, row_labels + run.begin, -1);
+      int value = final_label[component_of_run[r]];
+      if (value >= 0) {
+        int& mapped = renumber[static_cast<std::size_t>(value)];
+        if (mapped < 0) mapped = count++;
+        value = mapped;
+      }
+      std::fill(row_labels + run.begin, row_labels + run.end, value);
+      x = run.end;
+    }
+    std::fill(row_labels + x, row_labels + width, -1);
   }
   return count;
 }
@@ -263,75 +661,22 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
   if (!density.empty() && (density.type() != CV_32FC1 || density.size() != labels.size())) {
     throw std::invalid_argument("fitSuperpoints: density must be CV_32FC1 of the labels' size");
   }
-  double max_value = -1.0;
-  cv::minMaxLoc(labels, nullptr, &max_value);
-  const int count = static_cast<int>(max_value) + 1;
-  struct Sums {
-    double n = 0, u = 0, v = 0, density = 0;
-    Eigen::Vector3d color = Eigen::Vector3d::Zero();
-    Eigen::Vector3d position = Eigen::Vector3d::Zero();
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d reference = Eigen::Vector3d::Zero();  // first point, for precision
-  };
-  std::vector<Sums> sums(static_cast<std::size_t>(std::max(0, count)));
   const bool depth = features.hasDepth();
-  // Runs of equal labels are summed in float registers (relative to the label's first point),
-  // then added to the double totals.
   const float* rho = density.empty() ? nullptr : density.ptr<float>();
-  for (int row = 0; row < labels.rows; ++row) {
-    const int* l = labels.ptr<int>(row);
-    const std::size_t base = static_cast<std::size_t>(row) * features.width;
-    int col = 0;
-    while (col < labels.cols) {
-      const int k = l[col];
-      int end = col + 1;
-      while (end < labels.cols && l[end] == k) ++end;
-      if (k >= 0) {
-        Sums& s = sums[static_cast<std::size_t>(k)];
-        if (depth && s.n == 0.0) {
-          s.reference = Eigen::Vector3d(features.x[base + col], features.y[base + col],
-                                        features.z[base + col]);
-        }
-        const double run = end - col;
-        s.n += run;
-        s.u += 0.5 * run * (col + end - 1);
-        s.v += run * row;
-        float sr = 0, sg = 0, sb = 0, srho = 0;
-        for (int x = col; x < end; ++x) {
-          sr += features.r[base + x];
-          sg += features.g[base + x];
-          sb += features.b[base + x];
-          if (rho != nullptr) srho += rho[base + x];
-        }
-        s.color += Eigen::Vector3d(sr, sg, sb);
-        s.density += srho;
-        if (depth) {
-          const float rx = static_cast<float>(s.reference.x());
-          const float ry = static_cast<float>(s.reference.y());
-          const float rz = static_cast<float>(s.reference.z());
-          const detail::PointMoments m =
-              detail::sumPointMoments(features.x.data() + base, features.y.data() + base,
-                                      features.z.data() + base, col, end, rx, ry, rz);
-          float snx = 0, sny = 0, snz = 0;
-          for (int x = col; x < end; ++x) {
-            snx += features.nx[base + x];
-            sny += features.ny[base + x];
-            snz += features.nz[base + x];
-          }
-          s.position += Eigen::Vector3d(m.sx, m.sy, m.sz);
-          Eigen::Matrix3d scatter;
-          scatter << m.sxx, m.sxy, m.sxz, m.sxy, m.syy, m.syz, m.sxz, m.syz, m.szz;
-          s.scatter += scatter;
-          s.normal += Eigen::Vector3d(snx, sny, snz);
-        }
-      }
-      col = end;
-    }
+  // One pass over the labels: the label count is the largest label seen plus one.
+  std::vector<FitTotals> sums(1024);
+  int max_label = -1;
+  if (depth) {
+    max_label = rho != nullptr ? accumulateFit<true, true>(labels, features, rho, sums)
+                               : accumulateFit<true, false>(labels, features, rho, sums);
+  } else {
+    max_label = rho != nullptr ? accumulateFit<false, true>(labels, features, rho, sums)
+                               : accumulateFit<false, false>(labels, features, rho, sums);
   }
+  sums.resize(static_cast<std::size_t>(max_label + 1));
   std::vector<Superpixel> out(sums.size());
   for (std::size_t k = 0; k < sums.size(); ++k) {
-    const Sums& s = sums[k];
+    const FitTotals& s = sums[k];
     Superpixel& sp = out[k];
     sp.id = static_cast<int>(k);
     sp.radius_m = radius_m;
