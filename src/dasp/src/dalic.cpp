@@ -331,23 +331,6 @@ DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density
   }
 }
 
-// End of the run of equal labels that starts at `begin` (one past its last pixel). Runs are
-// about 20 pixels long: eight labels are compared at a time, two per 64-bit word.
-DASP_ALWAYS_INLINE int runEnd(const int* labels, int begin, int width) {
-  const int k = labels[begin];
-  const std::uint32_t k32 = static_cast<std::uint32_t>(k);
-  const std::uint64_t pair = (static_cast<std::uint64_t>(k32) << 32) | k32;
-  int end = begin + 1;
-  while (end + 8 <= width) {
-    std::uint64_t w[4];
-    std::memcpy(w, labels + end, sizeof w);
-    if (((w[0] ^ pair) | (w[1] ^ pair) | (w[2] ^ pair) | (w[3] ^ pair)) != 0) break;
-    end += 8;
-  }
-  while (end < width && labels[end] == k) ++end;
-  return end;
-}
-
 // The update sums of rows [row_begin, row_end) into acc (kClusterAccSize floats per cluster).
 // Labels come in horizontal runs: the pixel-position sums of a run have closed forms, and the
 // feature sums of a run go to the lane accumulators.
@@ -363,7 +346,7 @@ DASP_ALWAYS_INLINE void accumulateRows(const PixelFeatures& f, const float* dens
     int col = 0;
     while (col < width) {
       const int k = row_labels[col];
-      const int end = runEnd(row_labels, col, width);
+      const int end = detail::labelRunEnd(row_labels, col, width);
       if (k >= 0) {
         const Cluster& c = clusters[k];
         float* a = acc + static_cast<std::size_t>(k) * kClusterAccSize;

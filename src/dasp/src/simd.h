@@ -3,6 +3,9 @@
 // floats at a time.
 #pragma once
 
+#include <cstdint>
+#include <cstring>
+
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define DASP_ALWAYS_INLINE inline __attribute__((always_inline))
 // The function is built for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA) and the baseline, and the
@@ -52,6 +55,24 @@ DASP_ALWAYS_INLINE bool coverSpan(int begin, int end, int width, int& start, int
   start = begin < width - vectors * kLanes ? begin : width - vectors * kLanes;
   stop = start + vectors * kLanes;
   return true;
+}
+
+/// End (one past the last pixel) of the run of equal labels that starts at `begin` in a row of
+/// `width` labels. Superpixel runs are about 20 pixels long: eight labels are compared at a
+/// time, two per 64-bit word.
+DASP_ALWAYS_INLINE int labelRunEnd(const int* labels, int begin, int width) {
+  const int k = labels[begin];
+  const std::uint32_t k32 = static_cast<std::uint32_t>(k);
+  const std::uint64_t pair = (static_cast<std::uint64_t>(k32) << 32) | k32;
+  int end = begin + 1;
+  while (end + 8 <= width) {
+    std::uint64_t w[4];
+    std::memcpy(w, labels + end, sizeof w);
+    if (((w[0] ^ pair) | (w[1] ^ pair) | (w[2] ^ pair) | (w[3] ^ pair)) != 0) break;
+    end += 8;
+  }
+  while (end < width && labels[end] == k) ++end;
+  return end;
 }
 
 }  // namespace dasp::detail

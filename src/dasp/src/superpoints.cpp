@@ -11,22 +11,12 @@
 #include "dasp/stages.h"
 #include "simd.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 namespace dasp {
 namespace {
 constexpr double kPiD = 3.14159265358979323846;
 
-// ---------------------------------------------------------------------------------------------
-// Float sums along a run of pixels in a fixed order: for runs of 4 or more pixels, four lanes
-// (lane j sums the pixels j, j + 4, ...), the lanes reduced as (l0 + l2) + (l1 + l3), then the
-// 0-3 remaining pixels one after the other; shorter runs one after the other. This is the order
-// of the vectorised loops these sums used to be (GCC, SSE2 baseline), so the superpoints and the
-// piece weights are bit-identical to before; the loops are written out to fuse the 16 sums of the
-// fit into one pass and to keep the order independent of what the vectoriser picks.
-// ---------------------------------------------------------------------------------------------
+// Float sums along a run of pixels: four lanes (lane j sums the pixels j, j + 4, ...) reduced
+// at the end of the run, then the 0-3 remaining pixels; the 16 sums of the fit in one pass.
 #if defined(__GNUC__)
 typedef float Lanes4 __attribute__((vector_size(16)));
 inline Lanes4 load4(const float* p) {
@@ -56,21 +46,8 @@ inline Lanes4 load4(const float* p) { return Lanes4{{p[0], p[1], p[2], p[3]}}; }
 inline Lanes4 splat4(float f) { return Lanes4{{f, f, f, f}}; }
 inline float lane(const Lanes4& v, int i) { return v.v[i]; }
 #endif
-// Keeps the compiler from reassociating the float operations around v (the build allows it).
-inline void pinOrder(float& v) {
-#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
-  __asm__("" : "+x"(v));
-#elif defined(__GNUC__)
-  __asm__("" : "+r"(v));
-#else
-  (void)v;
-#endif
-}
 inline float reduce4(const Lanes4& v) {
-  float even = lane(v, 0) + lane(v, 2), odd = lane(v, 1) + lane(v, 3);
-  pinOrder(even);
-  pinOrder(odd);
-  return even + odd;
+  return (lane(v, 0) + lane(v, 2)) + (lane(v, 1) + lane(v, 3));
 }
 
 // Sum of p[begin, end) (end > begin) in the fixed order above.
@@ -125,30 +102,20 @@ enum FitSum {
 };
 
 // The fit's float sums over the pixels [begin, end) of one row (positions relative to r*), in
-// the fixed order of runSum.
+// the order of runSum.
 template <bool kDepth, bool kRho>
 inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, float rz,
                        float* out) {
   constexpr int kUsed = kDepth ? kFitSums : kX;
-  const auto add_pixel = [&](int i, bool first_tail) {
+  const auto add_pixel = [&](int i) {
     out[kR] += f.r[i];
     out[kG] += f.g[i];
     out[kB] += f.b[i];
     if constexpr (kRho) out[kDensity] += f.rho[i];
     if constexpr (kDepth) {
       const float dx = f.x[i] - rx, dy = f.y[i] - ry, dz = f.z[i] - rz;
-      if (first_tail) {
-        // The first pixel after the four-lane part: the vectorised loop this replaces summed the
-        // x and y offsets of that pixel as (sum - r) + p.
-        float sx = out[kX] - rx, sy = out[kY] - ry;
-        pinOrder(sx);
-        pinOrder(sy);
-        out[kX] = sx + f.x[i];
-        out[kY] = sy + f.y[i];
-      } else {
-        out[kX] += dx;
-        out[kY] += dy;
-      }
+      out[kX] += dx;
+      out[kY] += dy;
       out[kZ] += dz;
       out[kXX] += dx * dx;
       out[kXY] += dx * dy;
@@ -164,10 +131,10 @@ inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, 
   for (int q = 0; q < kFitSums; ++q) out[q] = 0.0f;
   const int n = end - begin;
   if (n < 4) {
-    add_pixel(begin, false);
+    add_pixel(begin);
     if (n > 1) {
-      add_pixel(begin + 1, false);
-      if (n > 2) add_pixel(begin + 2, false);
+      add_pixel(begin + 1);
+      if (n > 2) add_pixel(begin + 2);
     }
     return;
   }
@@ -200,27 +167,12 @@ inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, 
     if (kRho || q != kDensity) out[q] = reduce4(acc[q]);
   }
   if (body_end < end) {
-    add_pixel(body_end, true);
+    add_pixel(body_end);
     if (body_end + 1 < end) {
-      add_pixel(body_end + 1, false);
-      if (body_end + 2 < end) add_pixel(body_end + 2, false);
+      add_pixel(body_end + 1);
+      if (body_end + 2 < end) add_pixel(body_end + 2);
     }
   }
-}
-
-// First column in [col, width) whose label differs from k (width if none).
-inline int runEnd(const int* l, int col, int width, int k) {
-#if defined(__SSE2__)
-  const __m128i key = _mm_set1_epi32(k);
-  while (col + 4 <= width) {
-    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(l + col));
-    const int same = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(v, key)));
-    if (same != 0xF) return col + __builtin_ctz(~same);
-    col += 4;
-  }
-#endif
-  while (col < width && l[col] == k) ++col;
-  return col;
 }
 
 struct FitTotals {
@@ -258,7 +210,7 @@ int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const fl
     int col = 0;
     while (col < width) {
       const int k = l[col];
-      const int end = runEnd(l, col + 1, width, k);
+      const int end = detail::labelRunEnd(l, col, width);
       if (k >= 0) {
         if (k > max_label) {
           max_label = k;
