@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <queue>
 #include <stdexcept>
@@ -630,7 +631,8 @@ void Dalic::update() {
                       }
                     });
 
-  std::vector<Cluster> next;
+  std::vector<Cluster>& next = next_clusters_;  // kept across updates: no allocation per frame
+  next.clear();
   next.reserve(k_count + static_cast<std::size_t>(std::max(0, params_.target_count)));
   for (std::size_t k = 0; k < k_count; ++k) {
     // This cluster's sums over the chunks (in chunk order).
@@ -706,8 +708,10 @@ void Dalic::update() {
       next.swap(kept);
     } else if (have < target) {
       // Max-heap on mass; ties broken by index for determinism.
-      std::priority_queue<std::pair<float, int>> heap;
-      for (int i = 0; i < have; ++i) heap.push({next[static_cast<std::size_t>(i)].mass, -i});
+      std::vector<std::pair<float, int>> by_mass(static_cast<std::size_t>(have));
+      for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, -i};
+      std::priority_queue<std::pair<float, int>> heap(std::less<std::pair<float, int>>(),
+                                                      std::move(by_mass));  // O(K) heapify
       for (int added = 0; added < target - have; ++added) {
         const int index = -heap.top().second;
         heap.pop();

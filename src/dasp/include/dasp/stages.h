@@ -168,6 +168,7 @@ class Dalic {
   std::vector<float> distance_;
   std::vector<float> accumulators_;
   std::vector<std::vector<int>> span_scratch_;  // per row stripe of assign()
+  std::vector<Cluster> next_clusters_;          // update()'s output, swapped with clusters_
 };
 
 /// Makes every label 4-connected: for each label the largest piece keeps it if its weight (sum
