@@ -1,6 +1,8 @@
 // DaspSegmenter (buffers kept across frames) and connectivity on the surface.
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include <opencv2/core.hpp>
 
 #include "dasp/dasp.h"
@@ -32,6 +34,27 @@ TEST(DaspSegmenter, StreamGivesTheOneShotResultForEveryFrame) {
     const Superpixels streamed = segmenter.compute(*frame);
     const Superpixels one_shot = computeDasp(*frame, config);
     EXPECT_TRUE(sameSuperpixels(streamed, one_shot));
+  }
+}
+
+TEST(ComputeDasp, ReusedBuffersGiveTheResultOfFreshOnes) {
+  // computeDasp keeps one set of buffers per thread: calls with other parameters and image
+  // sizes in between must not change a result.
+  DaspConfig a;
+  a.superpixel_count = 60;
+  DaspConfig b;
+  b.superpixel_count = 25;
+  b.weight_normal = 0.0f;
+  b.iterations = 3;
+  const RgbdFrame planes = test::twoPlanes(160, 120, 1.0f, 1.6f, nullptr);
+  const RgbdFrame smaller = test::slantedPlane(80, 60, 1.2f, 0.6f);
+  const std::pair<const RgbdFrame*, const DaspConfig*> calls[] = {
+      {&planes, &a}, {&smaller, &b}, {&planes, &b}, {&smaller, &a}, {&planes, &a}};
+  for (const auto& [frame, config] : calls) {
+    const Superpixels reused = computeDasp(*frame, *config);
+    const Superpixels fresh = DaspSegmenter(*config).compute(*frame);
+    EXPECT_TRUE(sameSuperpixels(reused, fresh))
+        << config->superpixel_count << " " << frame->color.cols;
   }
 }
 

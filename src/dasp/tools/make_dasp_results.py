@@ -170,7 +170,7 @@ def main():
               "ground-truth boundary), UE = Neubert-Protzel undersegmentation error, ASA = "
               "achievable segmentation accuracy, CE depth = depth compression error, CO = "
               "isoperimetric compactness (thesis eq. A.6/A.7). Time = CPU time of the method "
-              "call per frame on one core (one-shot call: allocations included), measured while "
+              "call per frame on one core, measured while "
               "other jobs shared the 2-core machine; the benchmark below compares speed properly."
               "\n")
     md.append("| method | superpixels delivered (K = 1000) | superpixels in mask | Rec | UE | ASA "
@@ -244,13 +244,17 @@ def main():
                   "on the same frame in the same run (region size 18, about 970 superpixels). "
                   "Medians of 3 repetitions; CPU is the process CPU time, Time the wall time (the "
                   "2-core machine was shared, so wall times are inflated; compare the ratios). "
-                  "BM_Dasp is the one-shot computeDasp call, BM_DaspStream a DaspSegmenter that keeps "
-                  "its per-pixel buffers from frame to frame (same result); DaspPixels scales the "
-                  "frame (K with it), DaspCount varies K on the full frame.\n")
+                  "BM_Dasp is the computeDasp call (it keeps one set of per-pixel buffers per "
+                  "calling thread), BM_DaspStream a DaspSegmenter of the caller's own (same "
+                  "result); DaspPixels scales the frame (K with it), DaspCount and "
+                  "OpenCvSlicCount vary K on the full frame. The ratio lines at the end are "
+                  "computed from the medians.\n")
         lines = [re.sub(r"\x1b\[[0-9;]*m", "", line.rstrip())
                  for line in open(args.bench, encoding="utf-8")]
         keep = [line for line in lines if "_median" in line or line.startswith("ratio")
-                or line.startswith("peak memory") or line.startswith("Benchmark")]
+                or line.startswith("peak memory") or line.startswith("Benchmark")
+                or line.startswith("runtime against") or re.match(r"^\s+K = ", line)
+                or re.match(r"^\s+[0-9.]+x the pixels", line)]
         md.append("```\n" + "\n".join(keep) + "\n```\n")
     md.append("## How to regenerate\n")
     md.append("```\nsrc/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
