@@ -14,6 +14,7 @@
 
 #include "dasp/stages.h"
 #include "parallel.h"
+#include "point_moments.h"
 #include "simd.h"
 
 namespace dasp {
@@ -302,15 +303,7 @@ DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density
           const Vec8f dx = in ? loadVec<Vec8f>(fr.x + c) - rx : zero;
           const Vec8f dy = in ? loadVec<Vec8f>(fr.y + c) - ry : zero;
           const Vec8f dz = in ? loadVec<Vec8f>(fr.z + c) - rz : zero;
-          sum[kSx] += dx;
-          sum[kSy] += dy;
-          sum[kSz] += dz;
-          sum[kSxx] += dx * dx;
-          sum[kSxy] += dx * dy;
-          sum[kSxz] += dx * dz;
-          sum[kSyy] += dy * dy;
-          sum[kSyz] += dy * dz;
-          sum[kSzz] += dz * dz;
+          detail::addPointMoments(sum + kSx, dx, dy, dz);
         }
       }
       storeVec(acc, loadVec<Vec8f>(acc) + laneTotals(sum));
@@ -328,15 +321,7 @@ DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density
     acc[kMass] += density[col];
     if constexpr (kDepth) {
       const float dx = fr.x[col] - rx, dy = fr.y[col] - ry, dz = fr.z[col] - rz;
-      acc[kSx] += dx;
-      acc[kSy] += dy;
-      acc[kSz] += dz;
-      acc[kSxx] += dx * dx;
-      acc[kSxy] += dx * dy;
-      acc[kSxz] += dx * dz;
-      acc[kSyy] += dy * dy;
-      acc[kSyz] += dy * dz;
-      acc[kSzz] += dz * dz;
+      detail::addPointMoments(acc + kSx, dx, dy, dz);
     }
   }
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "dasp/stages.h"
+#include "point_moments.h"
 #include "simd.h"
 
 namespace dasp {
@@ -114,15 +115,7 @@ inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, 
     if constexpr (kRho) out[kDensity] += f.rho[i];
     if constexpr (kDepth) {
       const float dx = f.x[i] - rx, dy = f.y[i] - ry, dz = f.z[i] - rz;
-      out[kX] += dx;
-      out[kY] += dy;
-      out[kZ] += dz;
-      out[kXX] += dx * dx;
-      out[kXY] += dx * dy;
-      out[kXZ] += dx * dz;
-      out[kYY] += dy * dy;
-      out[kYZ] += dy * dz;
-      out[kZZ] += dz * dz;
+      detail::addPointMoments(out + kX, dx, dy, dz);
       out[kNx] += f.nx[i];
       out[kNy] += f.ny[i];
       out[kNz] += f.nz[i];
@@ -149,15 +142,7 @@ inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, 
     if constexpr (kRho) acc[kDensity] += load4(f.rho + i);
     if constexpr (kDepth) {
       const Lanes4 dx = load4(f.x + i) - vrx, dy = load4(f.y + i) - vry, dz = load4(f.z + i) - vrz;
-      acc[kX] += dx;
-      acc[kY] += dy;
-      acc[kZ] += dz;
-      acc[kXX] += dx * dx;
-      acc[kXY] += dx * dy;
-      acc[kXZ] += dx * dz;
-      acc[kYY] += dy * dy;
-      acc[kYZ] += dy * dz;
-      acc[kZZ] += dz * dz;
+      detail::addPointMoments(acc + kX, dx, dy, dz);
       acc[kNx] += load4(f.nx + i);
       acc[kNy] += load4(f.ny + i);
       acc[kNz] += load4(f.nz + i);
