@@ -247,8 +247,10 @@ def main():
                   "BM_Dasp is the computeDasp call (it keeps one set of per-pixel buffers per "
                   "calling thread), BM_DaspStream a DaspSegmenter of the caller's own (same "
                   "result); DaspPixels scales the frame (K with it), DaspCount and "
-                  "OpenCvSlicCount vary K on the full frame. The ratio lines at the end are "
-                  "computed from the medians.\n")
+                  "OpenCvSlicCount vary K on the full frame. BM_DaspVsOpenCvSlic alternates the two "
+                  "methods frame by frame and compares their CPU times (the ratio least disturbed by "
+                  "other jobs on the machine); the other ratio lines at the end are computed from "
+                  "the medians.\n")
         lines = [re.sub(r"\x1b\[[0-9;]*m", "", line.rstrip())
                  for line in open(args.bench, encoding="utf-8")]
         keep = [line for line in lines if "_median" in line or line.startswith("ratio")
