@@ -242,7 +242,7 @@ def main():
         md.append("## Speed: dasp_dasp_bench (Google Benchmark), same frame, same run\n")
         md.append("640x480 frame learn0, K = 1000, 5 iterations; OpenCV ximgproc SLIC 10 iterations "
                   "on the same frame in the same run (region size 18, about 970 superpixels). "
-                  "Medians of 3 repetitions; CPU is the process CPU time, Time the wall time (the "
+                  "Medians of 5 repetitions; CPU is the process CPU time, Time the wall time (the "
                   "2-core machine was shared, so wall times are inflated; compare the ratios). "
                   "BM_Dasp is the computeDasp call (it keeps one set of per-pixel buffers per "
                   "calling thread), BM_DaspStream a DaspSegmenter of the caller's own (same "
