@@ -36,6 +36,12 @@ inline RgbdFrame loadBenchFrame() {
   return frame;
 }
 
+/// The bench frame, loaded once per process.
+inline const RgbdFrame& benchFrame() {
+  static const RgbdFrame frame = loadBenchFrame();
+  return frame;
+}
+
 /// Region size of OpenCV SLIC for K near 1000 at 640x480: 640x480 / 18^2 = 948 grid cells, SLIC
 /// returns about 970.
 constexpr int kSlicRegionSize = 18;

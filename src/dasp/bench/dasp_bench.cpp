@@ -31,11 +31,6 @@ using namespace dasp;
 constexpr int kCount = 1000;
 constexpr int kIterations = 5;
 
-const RgbdFrame& frame() {
-  static const RgbdFrame f = bench::loadBenchFrame();
-  return f;
-}
-
 DaspConfig config(int threads) {
   DaspConfig c;
   c.superpixel_count = kCount;
@@ -48,9 +43,9 @@ DaspConfig config(int threads) {
 RgbdFrame scaledFrame(int quarter_factor) {
   const double s = quarter_factor / 4.0;
   RgbdFrame f;
-  cv::resize(frame().color, f.color, cv::Size(), s, s, cv::INTER_LINEAR);
-  cv::resize(frame().depth, f.depth, cv::Size(), s, s, cv::INTER_NEAREST);
-  const Intrinsics k = frame().intrinsics;
+  cv::resize(bench::benchFrame().color, f.color, cv::Size(), s, s, cv::INTER_LINEAR);
+  cv::resize(bench::benchFrame().depth, f.depth, cv::Size(), s, s, cv::INTER_NEAREST);
+  const Intrinsics k = bench::benchFrame().intrinsics;
   f.intrinsics = {static_cast<float>(k.fx * s), static_cast<float>(k.fy * s),
                   static_cast<float>((k.cx + 0.5) * s - 0.5),
                   static_cast<float>((k.cy + 0.5) * s - 0.5)};
@@ -61,14 +56,14 @@ void BM_Features(benchmark::State& state) {
   const DaspConfig c = config(static_cast<int>(state.range(0)));
   PixelFeatures features;  // kept across frames, as DaspSegmenter does
   for (auto _ : state) {
-    computeFeatures(frame(), c, features);
+    computeFeatures(bench::benchFrame(), c, features);
     benchmark::DoNotOptimize(features.valid_count);
   }
 }
 BENCHMARK(BM_Features)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 void BM_Density(benchmark::State& state) {
-  const PixelFeatures f = computeFeatures(frame(), config(1));
+  const PixelFeatures f = computeFeatures(bench::benchFrame(), config(1));
   for (auto _ : state) {
     const float radius = radiusForCount(f, kCount);
     benchmark::DoNotOptimize(computeDepthDensity(f, radius));
@@ -77,7 +72,7 @@ void BM_Density(benchmark::State& state) {
 BENCHMARK(BM_Density)->Unit(benchmark::kMillisecond);
 
 void BM_Sampling(benchmark::State& state) {
-  const PixelFeatures f = computeFeatures(frame(), config(1));
+  const PixelFeatures f = computeFeatures(bench::benchFrame(), config(1));
   const cv::Mat density = computeDepthDensity(f, radiusForCount(f, kCount));
   const auto method = static_cast<SeedingMethod>(state.range(0));
   for (auto _ : state) benchmark::DoNotOptimize(sampleSeeds(density, method, 0));
@@ -100,7 +95,7 @@ struct DalicFixture {
   std::vector<Seed> seeds;
   explicit DalicFixture(int threads) {
     const DaspConfig c = config(threads);
-    features = computeFeatures(frame(), c);
+    features = computeFeatures(bench::benchFrame(), c);
     params.radius_m = radiusForCount(features, kCount);
     density = computeDepthDensity(features, params.radius_m);
     params.window_multiple = c.window_multiple;
@@ -147,7 +142,7 @@ BENCHMARK(BM_ConnectivityAndSuperpointFit)->Unit(benchmark::kMillisecond);
 void BM_Dasp(benchmark::State& state) {
   const DaspConfig c = config(static_cast<int>(state.range(0)));
   std::size_t count = 0;
-  for (auto _ : state) count = computeDasp(frame(), c).superpixels.size();
+  for (auto _ : state) count = computeDasp(bench::benchFrame(), c).superpixels.size();
   state.counters["superpixels"] = static_cast<double>(count);
 }
 BENCHMARK(BM_Dasp)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
@@ -158,7 +153,7 @@ void BM_DaspStream(benchmark::State& state) {
   const DaspConfig c = config(static_cast<int>(state.range(0)));
   DaspSegmenter segmenter(c);
   std::size_t count = 0;
-  for (auto _ : state) count = segmenter.compute(frame()).superpixels.size();
+  for (auto _ : state) count = segmenter.compute(bench::benchFrame()).superpixels.size();
   state.counters["superpixels"] = static_cast<double>(count);
 }
 BENCHMARK(BM_DaspStream)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
@@ -168,7 +163,7 @@ void BM_OpenCvSlic(benchmark::State& state) {
   const int previous = cv::getNumThreads();
   cv::setNumThreads(threads == 1 ? 1 : -1);
   int count = 0;
-  for (auto _ : state) count = bench::runOpenCvSlic(frame().color);
+  for (auto _ : state) count = bench::runOpenCvSlic(bench::benchFrame().color);
   cv::setNumThreads(previous);
   state.counters["superpixels"] = count;
 }
@@ -190,9 +185,9 @@ void BM_DaspVsOpenCvSlic(benchmark::State& state) {
   double dasp_ms = 0.0, slic_ms = 0.0;
   for (auto _ : state) {
     const double t0 = threadCpuMs();
-    benchmark::DoNotOptimize(computeDasp(frame(), c));
+    benchmark::DoNotOptimize(computeDasp(bench::benchFrame(), c));
     const double t1 = threadCpuMs();
-    benchmark::DoNotOptimize(bench::runOpenCvSlic(frame().color));
+    benchmark::DoNotOptimize(bench::runOpenCvSlic(bench::benchFrame().color));
     const double t2 = threadCpuMs();
     dasp_ms += t1 - t0;
     slic_ms += t2 - t1;
@@ -226,7 +221,7 @@ BENCHMARK(BM_DaspPixels)
 void BM_DaspCount(benchmark::State& state) {
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(state.range(0));
-  for (auto _ : state) benchmark::DoNotOptimize(computeDasp(frame(), c));
+  for (auto _ : state) benchmark::DoNotOptimize(computeDasp(bench::benchFrame(), c));
 }
 // K from 250 to 4000 (superpixels of 1230 to 77 pixels at 640x480).
 void countArgs(benchmark::internal::Benchmark* b) {
@@ -238,10 +233,10 @@ BENCHMARK(BM_DaspCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
 void BM_OpenCvSlicCount(benchmark::State& state) {
   const int previous = cv::getNumThreads();
   cv::setNumThreads(1);
-  const int region = static_cast<int>(
-      std::lround(std::sqrt(static_cast<double>(frame().color.total()) / state.range(0))));
+  const int region = static_cast<int>(std::lround(
+      std::sqrt(static_cast<double>(bench::benchFrame().color.total()) / state.range(0))));
   int count = 0;
-  for (auto _ : state) count = bench::runOpenCvSlic(frame().color, region);
+  for (auto _ : state) count = bench::runOpenCvSlic(bench::benchFrame().color, region);
   cv::setNumThreads(previous);
   state.counters["superpixels"] = count;
 }
@@ -282,7 +277,7 @@ long maxRssKb() {
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   // Peak memory of one frame: resident set before and after the first DASP run.
-  const RgbdFrame& f = frame();
+  const RgbdFrame& f = bench::benchFrame();
   const long before_kb = maxRssKb();
   const Superpixels first = computeDasp(f, config(1));
   const long after_kb = maxRssKb();

@@ -29,11 +29,6 @@ using namespace dasp;
 
 constexpr int kCount = 1000;
 
-const RgbdFrame& frame() {
-  static const RgbdFrame f = bench::loadBenchFrame();
-  return f;
-}
-
 DaspConfig daspConfig() {
   DaspConfig c;
   c.superpixel_count = kCount;
@@ -42,7 +37,7 @@ DaspConfig daspConfig() {
 }
 
 const Superpixels& superpixels() {
-  static const Superpixels s = computeDasp(frame(), daspConfig());
+  static const Superpixels s = computeDasp(bench::benchFrame(), daspConfig());
   return s;
 }
 
@@ -113,7 +108,7 @@ BENCHMARK(BM_Sdasp)->Unit(benchmark::kMillisecond);
 void BM_DaspPlusSdasp(benchmark::State& state) {
   const SdaspConfig config;
   for (auto _ : state) {
-    const Superpixels s = computeDasp(frame(), daspConfig());
+    const Superpixels s = computeDasp(bench::benchFrame(), daspConfig());
     const WeightedGraph ucg = ultrametricContourGraph(s, config);
     benchmark::DoNotOptimize(segmentPixels(s.labels, segmentGraph(ucg, config.threshold)));
   }
@@ -124,7 +119,7 @@ void BM_OpenCvSlic(benchmark::State& state) {
   const int previous = cv::getNumThreads();
   cv::setNumThreads(1);
   int count = 0;
-  for (auto _ : state) count = bench::runOpenCvSlic(frame().color);
+  for (auto _ : state) count = bench::runOpenCvSlic(bench::benchFrame().color);
   cv::setNumThreads(previous);
   state.counters["superpixels"] = count;
 }

@@ -43,14 +43,9 @@ using namespace dasp;
 constexpr int kCount = 1000;
 constexpr double kPi = 3.14159265358979323846;
 
-const RgbdFrame& baseFrame() {
-  static const RgbdFrame f = bench::loadBenchFrame();
-  return f;
-}
-
 // Frame k of the endless stream (see the file comment).
 RgbdFrame streamFrame(std::int64_t k) {
-  const RgbdFrame& base = baseFrame();
+  const RgbdFrame& base = bench::benchFrame();
   const double phase = 2.0 * kPi * static_cast<double>(k % 40) / 40.0;
   const cv::Matx23d shift(1, 0, 8.0 * std::sin(phase), 0, 1, 4.0 * std::sin(2.0 * phase));
   RgbdFrame f;
