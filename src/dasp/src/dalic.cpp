@@ -14,12 +14,14 @@
 
 #include "dasp/stages.h"
 #include "parallel.h"
-#include "point_moments.h"
+#include "run_sums.h"
 #include "simd.h"
 
 namespace dasp {
 namespace {
 
+using detail::FeatureRow;
+using detail::featureRow;
 using detail::kLanes;
 #if DASP_VECTOR_EXTENSIONS
 using detail::coverSpan;
@@ -43,28 +45,10 @@ constexpr int kSpanBlock = 32;   // rows whose reach-disc chords are computed to
 // Distance of pixels no cluster may take (the reduced distances of ClusterTerms can be < 0).
 constexpr float kInvalidPixel = -std::numeric_limits<float>::max();
 
-// Accumulators per cluster, sums relative to the cluster's previous centre. The pixel-position
-// sums of a run of pixels have closed forms; the feature sums of a run are summed in vector
-// lanes, and the lanes of all sums are added up together at the end of the run.
+// Accumulators per cluster, sums relative to the cluster's previous centre: the pixel-position
+// sums of the label runs (closed forms) and the feature sums of run_sums.h.
 enum RunAcc : int { kCount, kSu, kSv, kSuu, kSvv, kSuv, kRunAccSize };
-enum LaneAcc : int {
-  kSr,
-  kSg,
-  kSb,
-  kMass,
-  kSx,
-  kSy,
-  kSz,
-  kSxx,
-  kSxy,
-  kSxz,
-  kSyy,
-  kSyz,
-  kSzz,
-  kLaneAccSize
-};
-constexpr int kFeatureSlots = 2 * kLanes;  // kLaneAccSize sums padded to whole vectors
-constexpr int kClusterAccSize = kRunAccSize + kFeatureSlots;  // floats per cluster
+constexpr int kClusterAccSize = kRunAccSize + detail::kRunSums;  // floats per cluster
 
 // Per-cluster constants of the distance, precomputed once per assign(). The distance is
 // expanded, |f - f_i|^2 = |f|^2 - 2 f . f_i + |f_i|^2 for colour and (d_DA) 3D position, and
@@ -87,27 +71,6 @@ struct ClusterTerms {
   float cnx, cny, cnz;  // -wn n_i (d_DA)
   float offset;         // wc |c_i|^2 (d_DA: + weight |p_i|^2 / R^2 + wn)
 };
-
-// The features of one image row.
-struct FeatureRow {
-  const float *r, *g, *b, *x, *y, *z, *nx, *ny, *nz;
-  const std::uint8_t* valid;
-};
-
-DASP_ALWAYS_INLINE FeatureRow featureRow(const PixelFeatures& f, int row) {
-  const std::size_t base = static_cast<std::size_t>(row) * f.width;
-  const bool depth = f.hasDepth();
-  return {f.r.data() + base,
-          f.g.data() + base,
-          f.b.data() + base,
-          depth ? f.x.data() + base : nullptr,
-          depth ? f.y.data() + base : nullptr,
-          depth ? f.z.data() + base : nullptr,
-          depth ? f.nx.data() + base : nullptr,
-          depth ? f.ny.data() + base : nullptr,
-          depth ? f.nz.data() + base : nullptr,
-          f.valid.data() + base};
-}
 
 // The (reduced, see ClusterTerms) distance of pixels to cluster t, for one pixel (float, int)
 // or eight (Vec8f, Vec8i). dv2: squared row offset from the centre (2D metrics).
@@ -262,73 +225,9 @@ DASP_VECTOR_CLONES void assignRowsColorDepth2D(const PixelFeatures& f, const Clu
   assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label, scratch);
 }
 
-#if DASP_VECTOR_EXTENSIONS
-// Lane-wise sums of pairs: (a0 + a1, a2 + a3, b0 + b1, b2 + b3, a4 + a5, a6 + a7, b4 + b5, b6 + b7)
-// (one vhaddps on AVX).
-DASP_ALWAYS_INLINE Vec8f pairSums(const Vec8f& a, const Vec8f& b) {
-  return __builtin_shuffle(a, b, Vec8i{0, 2, 8, 10, 4, 6, 12, 14}) +
-         __builtin_shuffle(a, b, Vec8i{1, 3, 9, 11, 5, 7, 13, 15});
-}
-
-// The lane totals of eight vectors: (sum of v[0], ..., sum of v[7]).
-DASP_ALWAYS_INLINE Vec8f laneTotals(const Vec8f* v) {
-  const Vec8f low = pairSums(pairSums(v[0], v[1]), pairSums(v[2], v[3]));   // v0..v3, halves
-  const Vec8f high = pairSums(pairSums(v[4], v[5]), pairSums(v[6], v[7]));  // v4..v7, halves
-  return __builtin_shuffle(low, high, Vec8i{0, 1, 2, 3, 8, 9, 10, 11}) +
-         __builtin_shuffle(low, high, Vec8i{4, 5, 6, 7, 12, 13, 14, 15});
-}
-#endif
-
-// Adds the features of the pixels [begin, end) of one row, all of one cluster, to the
-// cluster's feature sums (LaneAcc order, kFeatureSlots floats). Positions relative to
-// (rx, ry, rz).
-template <bool kDepth>
-DASP_ALWAYS_INLINE void accumulateRun(const FeatureRow& fr, const float* density, int width,
-                                      int begin, int end, float rx, float ry, float rz,
-                                      float* __restrict acc) {
-#if DASP_VECTOR_EXTENSIONS
-  {
-    int start = 0, stop = 0;
-    if (coverSpan(begin, end, width, start, stop)) {
-      Vec8f sum[kFeatureSlots] = {};
-      Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
-      const Vec8f zero{};
-      for (int c = start; c < stop; c += kLanes, col += kLanes) {
-        const Vec8i in = (col >= begin) & (col < end);
-        sum[kSr] += in ? loadVec<Vec8f>(fr.r + c) : zero;
-        sum[kSg] += in ? loadVec<Vec8f>(fr.g + c) : zero;
-        sum[kSb] += in ? loadVec<Vec8f>(fr.b + c) : zero;
-        sum[kMass] += in ? loadVec<Vec8f>(density + c) : zero;
-        if constexpr (kDepth) {
-          const Vec8f dx = in ? loadVec<Vec8f>(fr.x + c) - rx : zero;
-          const Vec8f dy = in ? loadVec<Vec8f>(fr.y + c) - ry : zero;
-          const Vec8f dz = in ? loadVec<Vec8f>(fr.z + c) - rz : zero;
-          detail::addPointMoments(sum + kSx, dx, dy, dz);
-        }
-      }
-      storeVec(acc, loadVec<Vec8f>(acc) + laneTotals(sum));
-      if constexpr (kDepth) {
-        storeVec(acc + kLanes, loadVec<Vec8f>(acc + kLanes) + laneTotals(sum + kLanes));
-      }
-      return;
-    }
-  }
-#endif
-  for (int col = begin; col < end; ++col) {
-    acc[kSr] += fr.r[col];
-    acc[kSg] += fr.g[col];
-    acc[kSb] += fr.b[col];
-    acc[kMass] += density[col];
-    if constexpr (kDepth) {
-      const float dx = fr.x[col] - rx, dy = fr.y[col] - ry, dz = fr.z[col] - rz;
-      detail::addPointMoments(acc + kSx, dx, dy, dz);
-    }
-  }
-}
-
 // The update sums of rows [row_begin, row_end) into acc (kClusterAccSize floats per cluster).
-// Labels come in horizontal runs: the pixel-position sums of a run have closed forms, and the
-// feature sums of a run go to the lane accumulators.
+// Labels come in horizontal runs: the pixel-position sums of a run have closed forms, the
+// feature sums are summed along the run.
 template <bool kDepth>
 DASP_ALWAYS_INLINE void accumulateRows(const PixelFeatures& f, const float* density,
                                        const int* labels, const Cluster* clusters, int row_begin,
@@ -358,8 +257,8 @@ DASP_ALWAYS_INLINE void accumulateRows(const PixelFeatures& f, const float* dens
         a[kSuu] += suu;
         a[kSvv] += run * dv * dv;
         a[kSuv] += su * dv;
-        accumulateRun<kDepth>(fr, density + base, width, col, end, c.position.x(), c.position.y(),
-                              c.position.z(), a + kRunAccSize);
+        detail::addRunSums<true, kDepth, false>(fr, density + base, width, col, end, c.position.x(),
+                                                c.position.y(), c.position.z(), a + kRunAccSize);
       }
       col = end;
     }
@@ -621,24 +520,24 @@ void Dalic::update() {
   next.reserve(k_count + static_cast<std::size_t>(std::max(0, params_.target_count)));
   for (std::size_t k = 0; k < k_count; ++k) {
     // This cluster's sums over the chunks (in chunk order).
-    float a[kRunAccSize + kLaneAccSize] = {};
+    float a[kClusterAccSize] = {};
     for (int chunk = 0; chunk < kUpdateChunks; ++chunk) {
       const float* src =
           accumulators_.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
-      for (int q = 0; q < kRunAccSize; ++q) a[q] += src[q];
-      for (int q = 0; q < kLaneAccSize; ++q) a[kRunAccSize + q] += src[kRunAccSize + q];
+      for (int q = 0; q < kClusterAccSize; ++q) a[q] += src[q];
     }
+    const float* sums = a + kRunAccSize;  // detail::RunSum order
     const float n = a[kCount];
-    if (n <= 0.0f || a[kRunAccSize + kMass] < params_.min_size_fraction) continue;  // purge
+    if (n <= 0.0f || sums[detail::kSumDensity] < params_.min_size_fraction) continue;  // purge
     Cluster c = clusters_[k];
     const float inv_n = 1.0f / n;
     const float mu = a[kSu] * inv_n, mv = a[kSv] * inv_n;
     c.u += mu;
     c.v += mv;
     c.color =
-        Eigen::Vector3f(a[kRunAccSize + kSr], a[kRunAccSize + kSg], a[kRunAccSize + kSb]) * inv_n;
+        Eigen::Vector3f(sums[detail::kSumR], sums[detail::kSumG], sums[detail::kSumB]) * inv_n;
     c.pixel_count = static_cast<int>(n);
-    c.mass = a[kRunAccSize + kMass];
+    c.mass = sums[detail::kSumDensity];
     // Principal 2D axis for splitting.
     const float cuu = a[kSuu] * inv_n - mu * mu;
     const float cvv = a[kSvv] * inv_n - mv * mv;
@@ -653,16 +552,14 @@ void Dalic::update() {
     c.spread_u = axis.x();
     c.spread_v = axis.y();
     if (depth) {
-      const Eigen::Vector3f mean(a[kRunAccSize + kSx] * inv_n, a[kRunAccSize + kSy] * inv_n,
-                                 a[kRunAccSize + kSz] * inv_n);
+      const float* moments = sums + detail::kSumX;  // x, y, z, xx, xy, xz, yy, yz, zz
+      const Eigen::Vector3f mean(moments[0] * inv_n, moments[1] * inv_n, moments[2] * inv_n);
       c.position += mean;
       if (n >= 4.0f) {
         Eigen::Matrix3f cov;
-        cov << a[kRunAccSize + kSxx] * inv_n, a[kRunAccSize + kSxy] * inv_n,
-            a[kRunAccSize + kSxz] * inv_n, a[kRunAccSize + kSxy] * inv_n,
-            a[kRunAccSize + kSyy] * inv_n, a[kRunAccSize + kSyz] * inv_n,
-            a[kRunAccSize + kSxz] * inv_n, a[kRunAccSize + kSyz] * inv_n,
-            a[kRunAccSize + kSzz] * inv_n;
+        cov << moments[3], moments[4], moments[5], moments[4], moments[6], moments[7], moments[5],
+            moments[7], moments[8];
+        cov *= inv_n;
         cov -= mean * mean.transpose();
         planeNormal(cov, c.normal);
       }  // else: too few points for a plane fit, keep the previous normal

@@ -9,155 +9,18 @@
 #include <Eigen/Eigenvalues>
 
 #include "dasp/stages.h"
-#include "point_moments.h"
+#include "run_sums.h"
 #include "simd.h"
 
 namespace dasp {
 namespace {
 constexpr double kPiD = 3.14159265358979323846;
 
-// Float sums along a run of pixels: four lanes (lane j sums the pixels j, j + 4, ...) reduced
-// at the end of the run, then the 0-3 remaining pixels; the 16 sums of the fit in one pass.
-#if defined(__GNUC__)
-typedef float Lanes4 __attribute__((vector_size(16)));
-inline Lanes4 load4(const float* p) {
-  Lanes4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-inline Lanes4 splat4(float f) { return Lanes4{f, f, f, f}; }
-inline float lane(const Lanes4& v, int i) { return v[i]; }
-#else
-struct Lanes4 {
-  float v[4];
-  Lanes4& operator+=(const Lanes4& o) {
-    for (int i = 0; i < 4; ++i) v[i] += o.v[i];
-    return *this;
-  }
-  friend Lanes4 operator-(Lanes4 a, const Lanes4& b) {
-    for (int i = 0; i < 4; ++i) a.v[i] -= b.v[i];
-    return a;
-  }
-  friend Lanes4 operator*(Lanes4 a, const Lanes4& b) {
-    for (int i = 0; i < 4; ++i) a.v[i] *= b.v[i];
-    return a;
-  }
-};
-inline Lanes4 load4(const float* p) { return Lanes4{{p[0], p[1], p[2], p[3]}}; }
-inline Lanes4 splat4(float f) { return Lanes4{{f, f, f, f}}; }
-inline float lane(const Lanes4& v, int i) { return v.v[i]; }
-#endif
-inline float reduce4(const Lanes4& v) {
-  return (lane(v, 0) + lane(v, 2)) + (lane(v, 1) + lane(v, 3));
-}
-
-// Sum of p[begin, end) (end > begin) in the fixed order above.
+// Sum of p[begin, end).
 float runSum(const float* p, int begin, int end) {
-  const int n = end - begin;
-  p += begin;
-  if (n < 4) {
-    float s = p[0];
-    if (n > 1) {
-      s += p[1];
-      if (n > 2) s += p[2];
-    }
-    return s;
-  }
-  const int body = n & ~3;
-  Lanes4 acc = splat4(0.0f);
-  for (int i = 0; i < body; i += 4) acc += load4(p + i);
-  float s = reduce4(acc);
-  if (body < n) {
-    s += p[body];
-    if (body + 1 < n) {
-      s += p[body + 1];
-      if (body + 2 < n) s += p[body + 2];
-    }
-  }
+  float s = 0.0f;
+  for (int i = begin; i < end; ++i) s += p[i];
   return s;
-}
-
-// Rows of the features the superpoint fit sums.
-struct FitRow {
-  const float *r, *g, *b, *rho, *x, *y, *z, *nx, *ny, *nz;
-};
-
-enum FitSum {
-  kR,
-  kG,
-  kB,
-  kDensity,
-  kX,
-  kY,
-  kZ,
-  kXX,
-  kXY,
-  kXZ,
-  kYY,
-  kYZ,
-  kZZ,
-  kNx,
-  kNy,
-  kNz,
-  kFitSums
-};
-
-// The fit's float sums over the pixels [begin, end) of one row (positions relative to r*), in
-// the order of runSum.
-template <bool kDepth, bool kRho>
-inline void fitRunSums(const FitRow& f, int begin, int end, float rx, float ry, float rz,
-                       float* out) {
-  constexpr int kUsed = kDepth ? kFitSums : kX;
-  const auto add_pixel = [&](int i) {
-    out[kR] += f.r[i];
-    out[kG] += f.g[i];
-    out[kB] += f.b[i];
-    if constexpr (kRho) out[kDensity] += f.rho[i];
-    if constexpr (kDepth) {
-      const float dx = f.x[i] - rx, dy = f.y[i] - ry, dz = f.z[i] - rz;
-      detail::addPointMoments(out + kX, dx, dy, dz);
-      out[kNx] += f.nx[i];
-      out[kNy] += f.ny[i];
-      out[kNz] += f.nz[i];
-    }
-  };
-  for (int q = 0; q < kFitSums; ++q) out[q] = 0.0f;
-  const int n = end - begin;
-  if (n < 4) {
-    add_pixel(begin);
-    if (n > 1) {
-      add_pixel(begin + 1);
-      if (n > 2) add_pixel(begin + 2);
-    }
-    return;
-  }
-  const int body_end = begin + (n & ~3);
-  Lanes4 acc[kUsed];
-  for (int q = 0; q < kUsed; ++q) acc[q] = splat4(0.0f);
-  const Lanes4 vrx = splat4(rx), vry = splat4(ry), vrz = splat4(rz);
-  for (int i = begin; i < body_end; i += 4) {
-    acc[kR] += load4(f.r + i);
-    acc[kG] += load4(f.g + i);
-    acc[kB] += load4(f.b + i);
-    if constexpr (kRho) acc[kDensity] += load4(f.rho + i);
-    if constexpr (kDepth) {
-      const Lanes4 dx = load4(f.x + i) - vrx, dy = load4(f.y + i) - vry, dz = load4(f.z + i) - vrz;
-      detail::addPointMoments(acc + kX, dx, dy, dz);
-      acc[kNx] += load4(f.nx + i);
-      acc[kNy] += load4(f.ny + i);
-      acc[kNz] += load4(f.nz + i);
-    }
-  }
-  for (int q = 0; q < kUsed; ++q) {
-    if (kRho || q != kDensity) out[q] = reduce4(acc[q]);
-  }
-  if (body_end < end) {
-    add_pixel(body_end);
-    if (body_end + 1 < end) {
-      add_pixel(body_end + 1);
-      if (body_end + 2 < end) add_pixel(body_end + 2);
-    }
-  }
 }
 
 struct FitTotals {
@@ -179,19 +42,8 @@ int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const fl
   for (int row = 0; row < labels.rows; ++row) {
     const int* l = labels.ptr<int>(row);
     const std::size_t base = static_cast<std::size_t>(row) * features.width;
-    FitRow f{};
-    f.r = features.r.data() + base;
-    f.g = features.g.data() + base;
-    f.b = features.b.data() + base;
-    if constexpr (kRho) f.rho = rho + base;
-    if constexpr (kDepth) {
-      f.x = features.x.data() + base;
-      f.y = features.y.data() + base;
-      f.z = features.z.data() + base;
-      f.nx = features.nx.data() + base;
-      f.ny = features.ny.data() + base;
-      f.nz = features.nz.data() + base;
-    }
+    const detail::FeatureRow f = detail::featureRow(features, row);
+    const float* rho_row = kRho ? rho + base : nullptr;
     int col = 0;
     while (col < width) {
       const int k = l[col];
@@ -209,25 +61,26 @@ int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const fl
         s.n += run;
         s.u += 0.5 * run * (col + end - 1);
         s.v += run * row;
-        float m[kFitSums];
-        fitRunSums<kDepth, kRho>(f, col, end, static_cast<float>(s.reference.x()),
-                                 static_cast<float>(s.reference.y()),
-                                 static_cast<float>(s.reference.z()), m);
-        s.color += Eigen::Vector3d(m[kR], m[kG], m[kB]);
-        s.density += kRho ? m[kDensity] : 0.0f;
+        float m[detail::kRunSums] = {};
+        detail::addRunSums<kRho, kDepth, kDepth>(
+            f, rho_row, width, col, end, static_cast<float>(s.reference.x()),
+            static_cast<float>(s.reference.y()), static_cast<float>(s.reference.z()), m);
+        s.color += Eigen::Vector3d(m[detail::kSumR], m[detail::kSumG], m[detail::kSumB]);
+        s.density += m[detail::kSumDensity];
         if constexpr (kDepth) {
-          s.position += Eigen::Vector3d(m[kX], m[kY], m[kZ]);
+          const float* moments = m + detail::kSumX;  // x, y, z, xx, xy, xz, yy, yz, zz
+          s.position += Eigen::Vector3d(moments[0], moments[1], moments[2]);
           double* c = s.scatter.data();  // symmetric: column-major = row-major
-          c[0] += m[kXX];
-          c[1] += m[kXY];
-          c[2] += m[kXZ];
-          c[3] += m[kXY];
-          c[4] += m[kYY];
-          c[5] += m[kYZ];
-          c[6] += m[kXZ];
-          c[7] += m[kYZ];
-          c[8] += m[kZZ];
-          s.normal += Eigen::Vector3d(m[kNx], m[kNy], m[kNz]);
+          c[0] += moments[3];
+          c[1] += moments[4];
+          c[2] += moments[5];
+          c[3] += moments[4];
+          c[4] += moments[6];
+          c[5] += moments[7];
+          c[6] += moments[5];
+          c[7] += moments[7];
+          c[8] += moments[8];
+          s.normal += Eigen::Vector3d(m[detail::kSumNx], m[detail::kSumNy], m[detail::kSumNz]);
         }
       }
       col = end;
