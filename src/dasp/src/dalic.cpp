@@ -38,7 +38,7 @@ constexpr int kChunks = 16;  // fixed row stripes of the assignment
 constexpr int kUpdateChunks = 2;
 constexpr float kUnreached = 1e30f;
 // A cluster's points define a plane if their second principal variance is at least this
-// fraction of the first (a strip two pixels wide gives about 0.03).
+// fraction of the first (a strip 2 by 10 pixels gives 0.25 / 8.25 = 0.03).
 constexpr float kMinPlaneSpread = 0.01f;
 constexpr int kNormalSteps = 4;  // power-iteration steps of the plane normal
 constexpr int kSpanBlock = 32;   // rows whose reach-disc chords are computed together
@@ -281,8 +281,8 @@ DASP_VECTOR_CLONES void accumulateRowsColor(const PixelFeatures& f, const float*
 // points' covariance. It is the dominant eigenvector of the adjugate (eigenvalues l1 l2 >=
 // l0 l2 >= l0 l1), found by power iteration from the cluster's previous normal; each step
 // shrinks the error by l0 / l1, which is tiny on the nearly flat patches superpixels are, so a
-// few steps replace a full eigendecomposition (the per-cluster cost that would make DASP's
-// runtime grow with K). Points on a line (a superpixel squeezed into one pixel column, as on
+// few steps replace a full eigendecomposition (a per-cluster cost, which makes DASP's runtime
+// grow with K). Points on a line (a superpixel squeezed into one pixel column, as on
 // steep surfaces at the image border; l1 under about 1 % of l2) define no plane: their "normal"
 // would be any direction across the line and push every pixel away, so `normal` is kept.
 void planeNormal(const Eigen::Matrix3f& cov, Eigen::Vector3f& normal) {
@@ -308,10 +308,11 @@ void planeNormal(const Eigen::Matrix3f& cov, Eigen::Vector3f& normal) {
 }  // namespace
 
 struct Dalic::Impl {
-  static ClusterTerms terms(const Dalic& self, const Cluster& c) {
+  static ClusterTerms terms(const Dalic& self, const Cluster& c, int id) {
     const PixelFeatures& f = self.features_;
     const DalicParams& p = self.params_;
     ClusterTerms t{};
+    t.id = id;
     // Integer bounding box of the disc |u - u_i| <= C R + 1 px (alg. 3; the pixel of margin
     // keeps tiny superpixels reachable), not rounded outwards further: the window's pixel count
     // per cluster pixel must not grow much as superpixels get small.
@@ -386,7 +387,7 @@ void Dalic::reset(const DalicParams& params) {
   clusters_.clear();
   if (labels_.size() != features.size()) {
     labels_.assign(features.size(), -1);
-    distance_.assign(features.size(), kUnreached);
+    distance_.resize(features.size());  // assign() fills it row by row
   }
 }
 
@@ -399,18 +400,9 @@ cv::Mat Dalic::labels() const {
 void Dalic::initialize(const std::vector<Seed>& seeds) {
   const PixelFeatures& f = features_;
   const float* density = density_.ptr<float>();
-  // Seeds are visited row by row (their windows then share cached rows; in sampling order each
-  // window would be fetched from memory), and the clusters kept in seed order.
-  std::vector<std::pair<int, int>> order(seeds.size());  // (row, seed index)
-  for (std::size_t i = 0; i < seeds.size(); ++i) {
-    order[i] = {std::clamp(static_cast<int>(std::lround(seeds[i].v)), 0, f.height - 1),
-                static_cast<int>(i)};
-  }
-  std::sort(order.begin(), order.end());
-  std::vector<Cluster> initial(seeds.size());
-  std::vector<std::uint8_t> kept(seeds.size(), 0);
-  for (const auto& [row, index] : order) {
-    const std::size_t seed_index = static_cast<std::size_t>(index);
+  clusters_.clear();
+  clusters_.reserve(seeds.size());
+  for (std::size_t seed_index = 0; seed_index < seeds.size(); ++seed_index) {
     const Seed& seed = seeds[seed_index];
     const int cx = std::clamp(static_cast<int>(std::lround(seed.u)), 0, f.width - 1);
     const int cy = std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1);
@@ -456,12 +448,7 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
     c.radius_px = Impl::radiusPx(*this, c.position.z(), seed_density);
     c.mass = 1.0f;
     c.origin = static_cast<int>(seed_index);
-    initial[seed_index] = c;
-    kept[seed_index] = 1;
-  }
-  clusters_.clear();
-  for (std::size_t i = 0; i < seeds.size(); ++i) {
-    if (kept[i]) clusters_.push_back(initial[i]);
+    clusters_.push_back(c);
   }
 }
 
@@ -470,8 +457,7 @@ void Dalic::assign() {
   std::vector<ClusterTerms> terms;
   terms.reserve(clusters_.size());
   for (std::size_t k = 0; k < clusters_.size(); ++k) {
-    terms.push_back(Impl::terms(*this, clusters_[k]));
-    terms.back().id = static_cast<int>(k);
+    terms.push_back(Impl::terms(*this, clusters_[k], static_cast<int>(k)));
   }
   const ClusterTerms* t = terms.data();
   const std::size_t count = terms.size();
@@ -582,12 +568,11 @@ void Dalic::update() {
                        [&](std::size_t a, std::size_t b) { return next[a].mass < next[b].mass; });
       std::vector<std::uint8_t> drop(next.size(), 0);
       for (int i = 0; i < have - target; ++i) drop[order[static_cast<std::size_t>(i)]] = 1;
-      std::vector<Cluster> kept;
-      kept.reserve(static_cast<std::size_t>(target));
+      std::size_t kept = 0;  // compacted in place, order kept
       for (std::size_t i = 0; i < next.size(); ++i) {
-        if (!drop[i]) kept.push_back(next[i]);
+        if (!drop[i]) next[kept++] = next[i];
       }
-      next.swap(kept);
+      next.resize(kept);
     } else if (have < target) {
       // Max-heap on mass; ties broken by index for determinism.
       std::vector<std::pair<float, int>> by_mass(static_cast<std::size_t>(have));
