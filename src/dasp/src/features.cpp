@@ -110,7 +110,7 @@ void resizeFeatures(PixelFeatures& features, int width, int height, bool depth) 
   }
 }
 
-void colorRow(const cv::Vec3b* src, int width, float* r, float* g, float* b) {
+DASP_ALWAYS_INLINE void colorRow(const cv::Vec3b* src, int width, float* r, float* g, float* b) {
   for (int col = 0; col < width; ++col) {
     b[col] = src[col][0] * (1.0f / 255.0f);
     g[col] = src[col][1] * (1.0f / 255.0f);
@@ -190,17 +190,13 @@ DASP_VECTOR_CLONES void normalRowInterior(const float* __restrict z, std::ptrdif
 
 // Colour, depth (metres), 3D point (eq. 3.4) and validity of one row; returns the number of
 // valid pixels. Depth is CV_16UC1 millimetres (depth_mm) or CV_32FC1 metres (depth_m).
-DASP_VECTOR_CLONES int pointRow(const std::uint8_t* __restrict bgr,
+DASP_VECTOR_CLONES int pointRow(const cv::Vec3b* __restrict bgr,
                                 const std::uint16_t* __restrict depth_mm,
                                 const float* __restrict depth_m, int width, float inv_fx, float cx,
                                 float ray_y, float* __restrict r, float* __restrict g,
                                 float* __restrict b, float* __restrict x, float* __restrict y,
                                 float* __restrict z, std::uint8_t* __restrict valid) {
-  for (int col = 0; col < width; ++col) {
-    b[col] = static_cast<float>(bgr[3 * col]) * (1.0f / 255.0f);
-    g[col] = static_cast<float>(bgr[3 * col + 1]) * (1.0f / 255.0f);
-    r[col] = static_cast<float>(bgr[3 * col + 2]) * (1.0f / 255.0f);
-  }
+  colorRow(bgr, width, r, g, b);
   if (depth_mm != nullptr) {
     for (int col = 0; col < width; ++col) z[col] = 0.001f * static_cast<float>(depth_mm[col]);
   } else {
@@ -262,7 +258,7 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
           const float ray_y = (static_cast<float>(row) - k.cy) * inv_fy;
           const std::size_t base = static_cast<std::size_t>(row) * width;
           chunk_valid[static_cast<std::size_t>(chunk)] +=
-              pointRow(frame.color.ptr<std::uint8_t>(row),
+              pointRow(frame.color.ptr<cv::Vec3b>(row),
                        millimetres ? frame.depth.ptr<std::uint16_t>(row) : nullptr,
                        millimetres ? nullptr : frame.depth.ptr<float>(row), width, inv_fx, k.cx,
                        ray_y, features.r.data() + base, features.g.data() + base,
