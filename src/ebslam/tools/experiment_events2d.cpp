@@ -19,6 +19,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -169,19 +170,19 @@ double bestTimeOffset(const Trajectory& estimated, const Trajectory& truth) {
   return best;
 }
 
-std::vector<double> parseDoubles(const std::string& text) {
-  std::vector<double> out;
+// Comma-separated numbers, e.g. "25,100" (throws std::invalid_argument on a bad item).
+template <typename T>
+std::vector<T> parseList(const std::string& text) {
+  std::vector<T> out;
   std::stringstream ss(text);
   std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
-  return out;
-}
-
-std::vector<int> parseList(const std::string& text) {
-  std::vector<int> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stoi(item));
+  while (std::getline(ss, item, ',')) {
+    if constexpr (std::is_integral_v<T>) {
+      out.push_back(static_cast<T>(std::stoi(item)));
+    } else {
+      out.push_back(static_cast<T>(std::stod(item)));
+    }
+  }
   return out;
 }
 
@@ -346,19 +347,19 @@ int main(int argc, char** argv) {
                     failed ? " (diverged)" : "", run.events.size() / seconds);
         std::fflush(stdout);
       };
-      const std::vector<int> ebpf_k = parseList(ebpf_resample_text);
+      const std::vector<int> ebpf_k = parseList<int>(ebpf_resample_text);
       for (int k : ebpf_k) {
         for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf", k, g0_ebpf, seed, true);
       }
-      for (int n : parseList(particles_text)) {
+      for (int n : parseList<int>(particles_text)) {
         for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d", n, g0_slam, seed, true);
       }
       // G0 sweeps over every trajectory and seed: the defaults are chosen on the whole set.
-      for (double g0 : parseDoubles(g0_sweep_ebpf)) {
+      for (double g0 : parseList<double>(g0_sweep_ebpf)) {
         if (ebpf_k.empty() || g0 == g0_ebpf) continue;  // the main runs above
         for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf_g0", ebpf_k[0], g0, seed, false);
       }
-      for (double g0 : parseDoubles(g0_sweep_slam)) {
+      for (double g0 : parseList<double>(g0_sweep_slam)) {
         if (g0 == g0_slam) continue;
         for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d_g0", 10, g0, seed, false);
       }
