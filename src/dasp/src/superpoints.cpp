@@ -35,8 +35,8 @@ struct FitTotals {
 // Runs of equal labels are summed in float registers (relative to the label's first point),
 // then added to the double totals. Returns the largest label seen.
 template <bool kDepth, bool kRho>
-int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const float* rho,
-                  std::vector<FitTotals>& sums) {
+DASP_ALWAYS_INLINE int accumulateFit(const cv::Mat& labels, const PixelFeatures& features,
+                                     const float* rho, std::vector<FitTotals>& sums) {
   const int width = labels.cols;
   int max_label = -1;
   for (int row = 0; row < labels.rows; ++row) {
@@ -87,6 +87,17 @@ int accumulateFit(const cv::Mat& labels, const PixelFeatures& features, const fl
     }
   }
   return max_label;
+}
+
+// The fit's accumulation for each kind of input, built for the vector units of the CPU.
+DASP_VECTOR_CLONES int accumulateFitAny(const cv::Mat& labels, const PixelFeatures& features,
+                                        const float* rho, std::vector<FitTotals>& sums) {
+  if (features.hasDepth()) {
+    return rho != nullptr ? accumulateFit<true, true>(labels, features, rho, sums)
+                          : accumulateFit<true, false>(labels, features, rho, sums);
+  }
+  return rho != nullptr ? accumulateFit<false, true>(labels, features, rho, sums)
+                        : accumulateFit<false, false>(labels, features, rho, sums);
 }
 
 }  // namespace
@@ -455,14 +466,7 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
   const float* rho = density.empty() ? nullptr : density.ptr<float>();
   // One pass over the labels: the label count is the largest label seen plus one.
   std::vector<FitTotals> sums(1024);
-  int max_label = -1;
-  if (depth) {
-    max_label = rho != nullptr ? accumulateFit<true, true>(labels, features, rho, sums)
-                               : accumulateFit<true, false>(labels, features, rho, sums);
-  } else {
-    max_label = rho != nullptr ? accumulateFit<false, true>(labels, features, rho, sums)
-                               : accumulateFit<false, false>(labels, features, rho, sums);
-  }
+  const int max_label = accumulateFitAny(labels, features, rho, sums);
   sums.resize(static_cast<std::size_t>(max_label + 1));
   std::vector<Superpixel> out(sums.size());
   for (std::size_t k = 0; k < sums.size(); ++k) {
