@@ -24,7 +24,7 @@ using detail::FeatureRow;
 using detail::featureRow;
 using detail::kLanes;
 #if DASP_VECTOR_EXTENSIONS
-using detail::coverSpan;
+using detail::coverSpanAligned;
 using detail::loadVec;
 using detail::storeVec;
 using detail::Vec8f;
@@ -178,7 +178,7 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
 #if DASP_VECTOR_EXTENSIONS
       {
         int start = 0, stop = 0;
-        if (coverSpan(x0, x1 + 1, width, start, stop)) {
+        if (coverSpanAligned(x0, x1 + 1, width, start, stop)) {
           Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
           for (int c = start; c < stop; c += kLanes, col += kLanes) {
             const auto load = [&fr, c](const float* FeatureRow::*field) {
@@ -295,14 +295,15 @@ void planeNormal(const Eigen::Matrix3f& cov, Eigen::Vector3f& normal) {
   const float trace = a + d + f;                  // l0 + l1 + l2
   const float adjugate_trace = adjugate.trace();  // l0 l1 + l0 l2 + l1 l2, about l1 l2
   if (!(adjugate_trace > kMinPlaneSpread * trace * trace)) return;
+  // Scaled by 1 / trace, the adjugate's largest eigenvalue is in [1/3, 1]: the steps need no
+  // normalisation in between (the length stays in [3^-kNormalSteps, 1]), which would put a
+  // square root and a division on this per-cluster chain of dependent steps.
+  adjugate *= 1.0f / adjugate_trace;
   Eigen::Vector3f x = normal;
-  for (int step = 0; step < kNormalSteps; ++step) {
-    x = adjugate * x;
-    const float length = x.norm();
-    if (!(length > 0.0f) || !std::isfinite(length)) return;  // start orthogonal to the normal
-    x /= length;
-  }
-  normal = x;
+  for (int step = 0; step < kNormalSteps; ++step) x = adjugate * x;
+  const float length = x.norm();
+  if (!(length > 0.0f) || !std::isfinite(length)) return;  // start orthogonal to the normal
+  normal = x * (1.0f / length);
 }
 
 }  // namespace

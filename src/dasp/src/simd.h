@@ -57,6 +57,17 @@ DASP_ALWAYS_INLINE bool coverSpan(int begin, int end, int width, int& start, int
   return true;
 }
 
+/// Like coverSpan, but the vectors start at multiples of kLanes columns wherever the row allows:
+/// a loop that stores to the row (the assignment's distances and labels) then loads exactly what
+/// an earlier span stored, or nothing of it, and the store can be forwarded. Unaligned, the load
+/// of a span overlapping its neighbour's last store in part stalls until that store is written.
+DASP_ALWAYS_INLINE bool coverSpanAligned(int begin, int end, int width, int& start, int& stop) {
+  start = begin & ~(kLanes - 1);
+  stop = (end + kLanes - 1) & ~(kLanes - 1);
+  if (stop <= width) return true;
+  return coverSpan(begin, end, width, start, stop);
+}
+
 /// End (one past the last pixel) of the run of equal labels that starts at `begin` in a row of
 /// `width` labels. Superpixel runs are about 20 pixels long: eight labels are compared at a
 /// time, two per 64-bit word.
