@@ -8,6 +8,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "event_batches.h"
+
 namespace ebslam {
 
 void EventFilterConfig::validate() const {
@@ -183,35 +185,18 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
   last_t_us_ = t;
 
   const EventFilterConfig& f = config_.filter;
-  const float* ox = camera_.offsetX().data();
-  const float* oy = camera_.offsetY().data();
-  std::uint32_t index[64];
-  std::size_t i = 0;
-  while (i < count) {
-    const int b = static_cast<int>(std::min<std::size_t>(f.batch_size, count - i));
-    for (int j = 0; j < b; ++j) {
-      const Event& e = events[i + j];
-      index[j] = static_cast<std::uint32_t>(e.y) * camera_.width() + e.x;
-    }
-    // eq. 6.39: a batch of b events diffuses with b times the per-event variance.
-    const double root_b = std::sqrt(static_cast<double>(b));
-    particles_.step(index, b, ox, oy, likelihood_, schedule_.diffusion.sigma_xy_m * root_b,
-                    schedule_.diffusion.sigma_theta_rad * root_b, schedule_.batch_decay[b - 1]);
-    i += b;
-    processed_ += b;
-    since_resample_ += b;
-    if (since_resample_ >= f.resample_every) {
-      particles_.resampleSystematic(f.reset_scores_on_resample);
-      since_resample_ -= f.resample_every;
-      if (f.latency_compensation_s > 0.0) {
-        velocity_.add(1e-6 * static_cast<double>(events[i - 1].t_us), rawEstimate());
-      }
-      if (f.adapt_g0) {
-        const double g0 = g0_tracker_.update(f.resample_every, estimate());
-        if (g0 > 0.0) setG0(g0);
-      }
-    }
-  }
+  detail::localiseInBatches(
+      events, count, camera_, f, schedule_, likelihood_, particles_, processed_, since_resample_,
+      [&](const std::uint32_t*, int, bool resampled, std::size_t batch_end) {
+        if (!resampled) return;
+        if (f.latency_compensation_s > 0.0) {
+          velocity_.add(1e-6 * static_cast<double>(events[batch_end - 1].t_us), rawEstimate());
+        }
+        if (f.adapt_g0) {
+          const double g0 = g0_tracker_.update(f.resample_every, estimate());
+          if (g0 > 0.0) setG0(g0);
+        }
+      });
 }
 
 Pose2 EventParticleFilter::estimate() const {

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "event_batches.h"
+
 namespace ebslam {
 
 void Ebslam2dConfig::validate() const {
@@ -72,53 +74,36 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
   last_t_us_ = t;
 
   const EventFilterConfig& f = config_.filter;
-  const float* ox = camera_.offsetX().data();
-  const float* oy = camera_.offsetY().data();
-  std::uint32_t index[64];
-  std::size_t i = 0;
-  while (i < count) {
-    const int b = static_cast<int>(std::min<std::size_t>(f.batch_size, count - i));
-    for (int j = 0; j < b; ++j) {
-      const Event& e = events[i + j];
-      index[j] = static_cast<std::uint32_t>(e.y) * camera_.width() + e.x;
-    }
-    // Localisation: EB-PF step against the current map M (alg. 8, "update particles").
-    const double root_b = std::sqrt(static_cast<double>(b));
-    particles_.step(index, b, ox, oy, map_, schedule_.diffusion.sigma_xy_m * root_b,
-                    schedule_.diffusion.sigma_theta_rad * root_b, schedule_.batch_decay[b - 1]);
-    i += b;
-    processed_ += b;
-    since_resample_ += b;
-    const bool resampled = since_resample_ >= f.resample_every;
-    if (resampled) {
-      particles_.resampleSystematic(f.reset_scores_on_resample);
-      since_resample_ -= f.resample_every;
-    }
-    // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
-    particles_.weightedMean(expected_.x, expected_.y, expected_.c, expected_.s);
-    if (resampled && f.adapt_g0) {
-      const double g0 = g0_tracker_.update(f.resample_every, expected_.pose());
-      if (g0 > 0.0) setG0(g0);
-    }
-    if (config_.splat == OccurrenceSplat::kExpectedPose) {
-      const Pose2 pose{expected_.x, expected_.y, 0.0};  // heading passed as (c, s)
-      for (int j = 0; j < b; ++j) splat(pose, expected_.c, expected_.s, index[j], 1.0f);
-    } else {
-      for (int p = 0; p < particles_.size(); ++p) {
-        const auto w = static_cast<float>(particles_.normalisedWeight(p));
-        if (w <= 0.0f) continue;
-        const Pose2 pose = particles_.particle(p);
-        const double c = std::cos(pose.theta);
-        const double s = std::sin(pose.theta);
-        for (int j = 0; j < b; ++j) splat(pose, c, s, index[j], w);
-      }
-    }
-    // Normalisation (eq. 7.7), periodically: once the expected pose moved the image enough.
-    if (imageMotionPx(last_normalised_, expected_) >= config_.normalisation_step_px) {
-      updateNormalisation(last_normalised_.pose(), expected_.pose());
-      last_normalised_ = expected_;
-    }
-  }
+  // Localisation: EB-PF steps against the current map M (alg. 8, "update particles"), then
+  // mapping after every batch.
+  detail::localiseInBatches(
+      events, count, camera_, f, schedule_, map_, particles_, processed_, since_resample_,
+      [&](const std::uint32_t* index, int b, bool resampled, std::size_t) {
+        // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
+        particles_.weightedMean(expected_.x, expected_.y, expected_.c, expected_.s);
+        if (resampled && f.adapt_g0) {
+          const double g0 = g0_tracker_.update(f.resample_every, expected_.pose());
+          if (g0 > 0.0) setG0(g0);
+        }
+        if (config_.splat == OccurrenceSplat::kExpectedPose) {
+          const Pose2 pose{expected_.x, expected_.y, 0.0};  // heading passed as (c, s)
+          for (int j = 0; j < b; ++j) splat(pose, expected_.c, expected_.s, index[j], 1.0f);
+        } else {
+          for (int p = 0; p < particles_.size(); ++p) {
+            const auto w = static_cast<float>(particles_.normalisedWeight(p));
+            if (w <= 0.0f) continue;
+            const Pose2 pose = particles_.particle(p);
+            const double c = std::cos(pose.theta);
+            const double s = std::sin(pose.theta);
+            for (int j = 0; j < b; ++j) splat(pose, c, s, index[j], w);
+          }
+        }
+        // Normalisation (eq. 7.7), periodically: once the expected pose moved the image enough.
+        if (imageMotionPx(last_normalised_, expected_) >= config_.normalisation_step_px) {
+          updateNormalisation(last_normalised_.pose(), expected_.pose());
+          last_normalised_ = expected_;
+        }
+      });
 }
 
 Pose2 EventSlam2d::estimate() const {
