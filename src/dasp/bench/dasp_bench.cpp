@@ -229,6 +229,73 @@ void countArgs(benchmark::internal::Benchmark* b) {
 }
 BENCHMARK(BM_DaspCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
 
+// Where the growth with K comes from: the DASP stages one by one (the steps computeDasp takes,
+// buffers kept across frames as in DaspSegmenter), each timed in thread CPU time; the counters
+// are ms per frame.
+void BM_DaspStagesCount(benchmark::State& state) {
+  DaspConfig c = config(1);
+  c.superpixel_count = static_cast<int>(state.range(0));
+  const RgbdFrame& frame = bench::benchFrame();
+  PixelFeatures features;
+  cv::Mat density;
+  computeFeatures(frame, c, features);
+  const float radius = radiusForCount(features, c.superpixel_count);
+  computeDepthDensity(features, radius, density);
+  DalicParams params;
+  params.radius_m = radius;
+  params.window_multiple = c.window_multiple;
+  params.target_count = c.superpixel_count;
+  params.threads = 1;
+  Dalic dalic(features, density, params);
+  const cv::Mat valid(features.height, features.width, CV_8UC1, features.valid.data());
+  const cv::Mat depth(features.height, features.width, CV_32FC1, features.z.data());
+  enum Stage {
+    kFeatures,
+    kDensity,
+    kSampling,
+    kInit,
+    kAssign,
+    kUpdate,
+    kConnectivity,
+    kFit,
+    kStages
+  };
+  double ms[kStages] = {};
+  for (auto _ : state) {
+    double t = threadCpuMs();
+    const auto lap = [&t, &ms](Stage stage) {
+      const double now = threadCpuMs();
+      ms[stage] += now - t;
+      t = now;
+    };
+    computeFeatures(frame, c, features);
+    lap(kFeatures);
+    computeDepthDensity(features, radiusForCount(features, c.superpixel_count), density);
+    lap(kDensity);
+    const std::vector<Seed> seeds = sampleSeeds(density, c.seeding, c.seed);
+    lap(kSampling);
+    dalic.reset(params);
+    dalic.initialize(seeds);
+    lap(kInit);
+    for (int it = 0; it < c.iterations; ++it) {
+      dalic.assign();
+      lap(kAssign);
+      if (it + 1 < c.iterations) dalic.update();
+      lap(kUpdate);
+    }
+    cv::Mat labels = dalic.labels().clone();
+    enforceConnectivity(labels, valid, density, c.min_size_fraction, depth, c.depth_jump_ratio);
+    lap(kConnectivity);
+    benchmark::DoNotOptimize(fitSuperpoints(labels, features, density, radius));
+    lap(kFit);
+  }
+  const double n = static_cast<double>(state.iterations());
+  const char* names[kStages] = {"features", "density", "sampling",     "init",
+                                "assign",   "update",  "connectivity", "fit"};
+  for (int stage = 0; stage < kStages; ++stage) state.counters[names[stage]] = ms[stage] / n;
+}
+BENCHMARK(BM_DaspStagesCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
+
 // The peer against K: OpenCV SLIC (10 iterations) with the region size for about K superpixels.
 void BM_OpenCvSlicCount(benchmark::State& state) {
   const int previous = cv::getNumThreads();
@@ -349,6 +416,25 @@ int main(int argc, char** argv) {
         std::printf(", OpenCV SLIC %7.2f ms (x%.2f), DASP / SLIC %.3f", slic_k, slic_k / slic_k1000,
                     dasp_k / slic_k);
       }
+      std::printf("\n");
+    }
+  }
+  // The stages against K (CPU ms per frame; assign and update summed over the iterations).
+  const auto stageMs = [&](int k, const std::string& stage) {
+    const auto it =
+        reporter.counters.find("BM_DaspStagesCount/K:" + std::to_string(k) + "." + stage);
+    return it == reporter.counters.end() ? -1.0 : it->second;
+  };
+  if (stageMs(1000, "assign") > 0) {
+    const char* stages[] = {"features", "density", "sampling",     "init",
+                            "assign",   "update",  "connectivity", "fit"};
+    std::printf("DASP stages against K (single-threaded, CPU ms per frame):\n       ");
+    for (const char* stage : stages) std::printf(" %12s", stage);
+    std::printf("\n");
+    for (int k : {250, 500, 1000, 2000, 4000}) {
+      if (stageMs(k, "assign") < 0) continue;
+      std::printf("  K = %4d", k);
+      for (const char* stage : stages) std::printf(" %12.2f", stageMs(k, stage));
       std::printf("\n");
     }
   }

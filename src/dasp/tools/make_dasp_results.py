@@ -247,7 +247,8 @@ def main():
                   "BM_Dasp is the computeDasp call (it keeps one set of per-pixel buffers per "
                   "calling thread), BM_DaspStream a DaspSegmenter of the caller's own (same "
                   "result); DaspPixels scales the frame (K with it), DaspCount and "
-                  "OpenCvSlicCount vary K on the full frame. BM_DaspVsOpenCvSlic alternates the two "
+                  "OpenCvSlicCount vary K on the full frame, DaspStagesCount times each DASP stage "
+                  "against K (the table after the ratios). BM_DaspVsOpenCvSlic alternates the two "
                   "methods frame by frame and compares their CPU times (the ratio least disturbed by "
                   "other jobs on the machine); the other ratio lines at the end are computed from "
                   "the medians.\n")
@@ -255,7 +256,8 @@ def main():
                  for line in open(args.bench, encoding="utf-8")]
         keep = [line for line in lines if "_median" in line or line.startswith("ratio")
                 or line.startswith("peak memory") or line.startswith("Benchmark")
-                or line.startswith("runtime against") or re.match(r"^\s+K = ", line)
+                or line.startswith("runtime against") or line.startswith("DASP stages")
+                or re.match(r"^\s+K = ", line) or re.match(r"^\s+features\s", line)
                 or re.match(r"^\s+[0-9.]+x the pixels", line)]
         md.append("```\n" + "\n".join(keep) + "\n```\n")
     md.append("## How to regenerate\n")
