@@ -1,10 +1,14 @@
 // The frame every dasp benchmark runs on: learn0 of ../shared/data/osd/learn (or of
 // $DASP_BENCH_FRAME_DIR), else a synthetic textured two-plane scene of the same size (640x480);
-// and the peer every bench compares against, OpenCV ximgproc SLIC.
+// the peer every bench compares against, OpenCV ximgproc SLIC; and the CPU time and memory
+// readings the benches share.
 #pragma once
+
+#include <sys/resource.h>
 
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
@@ -56,6 +60,21 @@ inline int runOpenCvSlic(const cv::Mat& bgr, int region_size = kSlicRegionSize) 
   cv::Mat labels;
   slic->getLabels(labels);
   return slic->getNumberOfSuperpixels();
+}
+
+/// CPU time of the calling thread, milliseconds: other jobs on a shared machine do not inflate
+/// it the way they inflate wall time.
+inline double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+/// Peak resident set size of the process so far, KiB.
+inline long maxRssKb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
 }
 
 }  // namespace dasp::bench

@@ -6,12 +6,10 @@
 // Frame: learn0 of ../shared/data/osd/learn (or $DASP_BENCH_FRAME_DIR/<name>), else a synthetic
 // textured two-plane scene of the same size.
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -93,13 +91,14 @@ struct DalicFixture {
   cv::Mat density;
   DalicParams params;
   std::vector<Seed> seeds;
-  explicit DalicFixture(int threads) {
-    const DaspConfig c = config(threads);
+  explicit DalicFixture(int threads, int count = kCount) {
+    DaspConfig c = config(threads);
+    c.superpixel_count = count;
     features = computeFeatures(bench::benchFrame(), c);
-    params.radius_m = radiusForCount(features, kCount);
+    params.radius_m = radiusForCount(features, count);
     density = computeDepthDensity(features, params.radius_m);
     params.window_multiple = c.window_multiple;
-    params.target_count = kCount;
+    params.target_count = count;
     params.threads = threads;
     seeds = sampleSeeds(density, c.seeding, c.seed);
   }
@@ -172,11 +171,6 @@ BENCHMARK(BM_OpenCvSlic)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kM
 // The bar's ratio measured robustly: DASP and OpenCV SLIC (single-threaded) alternate frame by
 // frame and each is timed in CPU time of this thread, so that other jobs on a shared machine
 // (which inflate wall times and come and go between two separate benchmarks) hit both alike.
-double threadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 void BM_DaspVsOpenCvSlic(benchmark::State& state) {
   const int previous = cv::getNumThreads();
@@ -184,11 +178,11 @@ void BM_DaspVsOpenCvSlic(benchmark::State& state) {
   const DaspConfig c = config(1);
   double dasp_ms = 0.0, slic_ms = 0.0;
   for (auto _ : state) {
-    const double t0 = threadCpuMs();
+    const double t0 = bench::threadCpuMs();
     benchmark::DoNotOptimize(computeDasp(bench::benchFrame(), c));
-    const double t1 = threadCpuMs();
+    const double t1 = bench::threadCpuMs();
     benchmark::DoNotOptimize(bench::runOpenCvSlic(bench::benchFrame().color));
-    const double t2 = threadCpuMs();
+    const double t2 = bench::threadCpuMs();
     dasp_ms += t1 - t0;
     slic_ms += t2 - t1;
   }
@@ -236,19 +230,10 @@ void BM_DaspStagesCount(benchmark::State& state) {
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(state.range(0));
   const RgbdFrame& frame = bench::benchFrame();
-  PixelFeatures features;
-  cv::Mat density;
-  computeFeatures(frame, c, features);
-  const float radius = radiusForCount(features, c.superpixel_count);
-  computeDepthDensity(features, radius, density);
-  DalicParams params;
-  params.radius_m = radius;
-  params.window_multiple = c.window_multiple;
-  params.target_count = c.superpixel_count;
-  params.threads = 1;
-  Dalic dalic(features, density, params);
-  const cv::Mat valid(features.height, features.width, CV_8UC1, features.valid.data());
-  const cv::Mat depth(features.height, features.width, CV_32FC1, features.z.data());
+  DalicFixture fx(1, c.superpixel_count);  // buffers and parameters; refilled every frame
+  Dalic dalic(fx.features, fx.density, fx.params);
+  const cv::Mat valid(fx.features.height, fx.features.width, CV_8UC1, fx.features.valid.data());
+  const cv::Mat depth(fx.features.height, fx.features.width, CV_32FC1, fx.features.z.data());
   enum Stage {
     kFeatures,
     kDensity,
@@ -262,19 +247,19 @@ void BM_DaspStagesCount(benchmark::State& state) {
   };
   double ms[kStages] = {};
   for (auto _ : state) {
-    double t = threadCpuMs();
+    double t = bench::threadCpuMs();
     const auto lap = [&t, &ms](Stage stage) {
-      const double now = threadCpuMs();
+      const double now = bench::threadCpuMs();
       ms[stage] += now - t;
       t = now;
     };
-    computeFeatures(frame, c, features);
+    computeFeatures(frame, c, fx.features);
     lap(kFeatures);
-    computeDepthDensity(features, radiusForCount(features, c.superpixel_count), density);
+    computeDepthDensity(fx.features, radiusForCount(fx.features, c.superpixel_count), fx.density);
     lap(kDensity);
-    const std::vector<Seed> seeds = sampleSeeds(density, c.seeding, c.seed);
+    const std::vector<Seed> seeds = sampleSeeds(fx.density, c.seeding, c.seed);
     lap(kSampling);
-    dalic.reset(params);
+    dalic.reset(fx.params);
     dalic.initialize(seeds);
     lap(kInit);
     for (int it = 0; it < c.iterations; ++it) {
@@ -284,9 +269,9 @@ void BM_DaspStagesCount(benchmark::State& state) {
       lap(kUpdate);
     }
     cv::Mat labels = dalic.labels().clone();
-    enforceConnectivity(labels, valid, density, c.min_size_fraction, depth, c.depth_jump_ratio);
+    enforceConnectivity(labels, valid, fx.density, c.min_size_fraction, depth, c.depth_jump_ratio);
     lap(kConnectivity);
-    benchmark::DoNotOptimize(fitSuperpoints(labels, features, density, radius));
+    benchmark::DoNotOptimize(fitSuperpoints(labels, fx.features, fx.density, fx.params.radius_m));
     lap(kFit);
   }
   const double n = static_cast<double>(state.iterations());
@@ -333,21 +318,15 @@ class RatioReporter : public benchmark::ConsoleReporter {
   std::map<std::string, double> counters;  // "<run>.<counter>"
 };
 
-long maxRssKb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   // Peak memory of one frame: resident set before and after the first DASP run.
   const RgbdFrame& f = bench::benchFrame();
-  const long before_kb = maxRssKb();
+  const long before_kb = bench::maxRssKb();
   const Superpixels first = computeDasp(f, config(1));
-  const long after_kb = maxRssKb();
+  const long after_kb = bench::maxRssKb();
   std::printf(
       "peak memory: max RSS %.1f MB before the first frame, %.1f MB after it (+%.1f MB "
       "for one %dx%d DASP frame, %zu superpixels)\n",

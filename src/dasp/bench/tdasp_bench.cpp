@@ -12,7 +12,6 @@
 // with fresh Kinect-like depth noise and colour noise every frame (seeded); a synthetic
 // two-plane scene if the data is absent.
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,7 +19,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -78,18 +76,6 @@ TdaspConfig tdaspConfig() {
   c.superpixels.dasp.superpixel_count = kCount;
   c.superpixels.dasp.threads = 1;
   return c;
-}
-
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-long maxRssKb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss;
 }
 
 long currentRssKb() {
@@ -166,13 +152,13 @@ void runStream(int frames, const std::string& csv_path) {
     std::fprintf(csv, "frame,cpu_ms,wall_ms,strands,strand_edges,segments,rss_kb\n");
   for (int k = 0; k < frames; ++k) {
     const RgbdFrame f = streamFrame(k);
-    const double start = threadCpuMs();
+    const double start = bench::threadCpuMs();
     const TdaspFrame out = tdasp.process(f);
-    cpu_ms[static_cast<std::size_t>(k)] = threadCpuMs() - start;
+    cpu_ms[static_cast<std::size_t>(k)] = bench::threadCpuMs() - start;
     strands[static_cast<std::size_t>(k)] = out.strand_count;
     if (k == 99) {
       rss_after_100 = currentRssKb();
-      max_rss_after_100 = maxRssKb();
+      max_rss_after_100 = bench::maxRssKb();
     }
     if (csv != nullptr) {
       std::fprintf(csv, "%d,%.3f,%.3f,%d,%d,%d,%ld\n", k, cpu_ms[static_cast<std::size_t>(k)],
@@ -208,7 +194,7 @@ void runStream(int frames, const std::string& csv_path) {
         "  memory: resident %.1f MB after 100 frames, %.1f MB at the end; peak (max RSS) %.1f MB "
         "after 100 frames, %.1f MB at the end\n",
         rss_after_100 / 1024.0, currentRssKb() / 1024.0, max_rss_after_100 / 1024.0,
-        maxRssKb() / 1024.0);
+        bench::maxRssKb() / 1024.0);
   }
   std::fflush(stdout);
 }
