@@ -5,9 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <functional>
 #include <limits>
-#include <queue>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
@@ -359,8 +357,22 @@ struct Dalic::Impl {
   }
 };
 
+// Working memory of assign() and update(): kept from call to call, so that the iterations
+// allocate nothing once the buffers have grown to the cluster count.
+struct Dalic::Scratch {
+  std::vector<ClusterTerms> terms;             // assign(): the distance constants of every cluster
+  std::vector<std::vector<int>> spans;         // assign(): span buckets, one per row stripe
+  std::vector<float> accumulators;             // update(): kClusterAccSize per stripe and cluster
+  std::vector<Cluster> next_clusters;          // update()'s output, swapped with clusters_
+  std::vector<std::pair<float, int>> by_mass;  // count control: (mass, index) per cluster
+  std::vector<std::uint8_t> drop;              // count control: clusters to drop
+};
+
 Dalic::Dalic(const PixelFeatures& features, const cv::Mat& density, const DalicParams& params)
-    : features_(features), density_(density), params_(params) {
+    : features_(features),
+      density_(density),
+      params_(params),
+      scratch_(std::make_unique<Scratch>()) {
   reset(params);
 }
 
@@ -455,8 +467,8 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
 
 void Dalic::assign() {
   const PixelFeatures& f = features_;
-  std::vector<ClusterTerms> terms;
-  terms.reserve(clusters_.size());
+  std::vector<ClusterTerms>& terms = scratch_->terms;
+  terms.clear();
   for (std::size_t k = 0; k < clusters_.size(); ++k) {
     terms.push_back(Impl::terms(*this, clusters_[k], static_cast<int>(k)));
   }
@@ -464,9 +476,9 @@ void Dalic::assign() {
   const std::size_t count = terms.size();
   float* dist = distance_.data();
   int* label = labels_.data();
-  span_scratch_.resize(kChunks);
+  scratch_->spans.resize(kChunks);
   detail::forChunks(f.height, kChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
-    std::vector<int>& scratch = span_scratch_[static_cast<std::size_t>(chunk)];
+    std::vector<int>& scratch = scratch_->spans[static_cast<std::size_t>(chunk)];
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
         assignRowsDepthAdaptive(f, t, count, row_begin, row_end, dist, label, scratch);
@@ -487,12 +499,13 @@ void Dalic::update() {
   if (k_count == 0) return;
   const bool depth = f.hasDepth();
   const std::size_t stride = static_cast<std::size_t>(kClusterAccSize) * k_count;
-  accumulators_.resize(stride * kUpdateChunks);
-  std::memset(accumulators_.data(), 0, accumulators_.size() * sizeof(float));
+  std::vector<float>& accumulators = scratch_->accumulators;
+  accumulators.resize(stride * kUpdateChunks);
+  std::memset(accumulators.data(), 0, accumulators.size() * sizeof(float));
   const float* density = density_.ptr<float>();
   detail::forChunks(f.height, kUpdateChunks, params_.threads,
                     [&](int chunk, int row_begin, int row_end) {
-                      float* acc = accumulators_.data() + stride * static_cast<std::size_t>(chunk);
+                      float* acc = accumulators.data() + stride * static_cast<std::size_t>(chunk);
                       if (depth) {
                         accumulateRowsDepth(f, density, labels_.data(), clusters_.data(), row_begin,
                                             row_end, acc);
@@ -502,7 +515,7 @@ void Dalic::update() {
                       }
                     });
 
-  std::vector<Cluster>& next = next_clusters_;  // kept across updates: no allocation per frame
+  std::vector<Cluster>& next = scratch_->next_clusters;
   next.clear();
   next.reserve(k_count + static_cast<std::size_t>(std::max(0, params_.target_count)));
   for (std::size_t k = 0; k < k_count; ++k) {
@@ -510,7 +523,7 @@ void Dalic::update() {
     float a[kClusterAccSize] = {};
     for (int chunk = 0; chunk < kUpdateChunks; ++chunk) {
       const float* src =
-          accumulators_.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
+          accumulators.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
       for (int q = 0; q < kClusterAccSize; ++q) a[q] += src[q];
     }
     const float* sums = a + kRunAccSize;  // detail::RunSum order
@@ -562,13 +575,15 @@ void Dalic::update() {
   const int target = params_.target_count;
   if (target > 0 && !next.empty()) {
     const int have = static_cast<int>(next.size());
+    std::vector<std::pair<float, int>>& by_mass = scratch_->by_mass;
+    by_mass.resize(static_cast<std::size_t>(have));
     if (have > target) {
-      std::vector<std::size_t> order(next.size());
-      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::stable_sort(order.begin(), order.end(),
-                       [&](std::size_t a, std::size_t b) { return next[a].mass < next[b].mass; });
-      std::vector<std::uint8_t> drop(next.size(), 0);
-      for (int i = 0; i < have - target; ++i) drop[order[static_cast<std::size_t>(i)]] = 1;
+      // The lightest first, ties in index order.
+      for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, i};
+      std::sort(by_mass.begin(), by_mass.end());
+      std::vector<std::uint8_t>& drop = scratch_->drop;
+      drop.assign(next.size(), 0);
+      for (int i = 0; i < have - target; ++i) drop[by_mass[static_cast<std::size_t>(i)].second] = 1;
       std::size_t kept = 0;  // compacted in place, order kept
       for (std::size_t i = 0; i < next.size(); ++i) {
         if (!drop[i]) next[kept++] = next[i];
@@ -576,13 +591,12 @@ void Dalic::update() {
       next.resize(kept);
     } else if (have < target) {
       // Max-heap on mass; ties broken by index for determinism.
-      std::vector<std::pair<float, int>> by_mass(static_cast<std::size_t>(have));
       for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, -i};
-      std::priority_queue<std::pair<float, int>> heap(std::less<std::pair<float, int>>(),
-                                                      std::move(by_mass));  // O(K) heapify
+      std::make_heap(by_mass.begin(), by_mass.end());  // O(K)
       for (int added = 0; added < target - have; ++added) {
-        const int index = -heap.top().second;
-        heap.pop();
+        const int index = -by_mass.front().second;
+        std::pop_heap(by_mass.begin(), by_mass.end());
+        by_mass.pop_back();
         Cluster& parent = next[static_cast<std::size_t>(index)];
         Cluster child = parent;
         child.origin = -1;  // a new superpixel: only the parent continues the seed
@@ -609,8 +623,10 @@ void Dalic::update() {
         }
         const float parent_mass = parent.mass;
         next.push_back(child);  // capacity reserved above: no reallocation
-        heap.push({parent_mass, -index});
-        heap.push({child.mass, -static_cast<int>(next.size() - 1)});
+        by_mass.push_back({parent_mass, -index});
+        std::push_heap(by_mass.begin(), by_mass.end());
+        by_mass.push_back({child.mass, -static_cast<int>(next.size() - 1)});
+        std::push_heap(by_mass.begin(), by_mass.end());
       }
     }
   }

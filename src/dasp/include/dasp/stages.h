@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -166,9 +167,8 @@ class Dalic {
   std::vector<Cluster> clusters_;
   std::vector<int> labels_;
   std::vector<float> distance_;
-  std::vector<float> accumulators_;
-  std::vector<std::vector<int>> span_scratch_;  // per row stripe of assign()
-  std::vector<Cluster> next_clusters_;          // update()'s output, swapped with clusters_
+  struct Scratch;  // working memory of assign() and update(), kept from call to call
+  std::unique_ptr<Scratch> scratch_;
 };
 
 /// Makes every label 4-connected: for each label the largest piece keeps it if its weight (sum
