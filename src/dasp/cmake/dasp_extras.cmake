@@ -33,9 +33,9 @@ if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/delta_density.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/sampling.cpp
     PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic;-fassociative-math;-fno-signed-zeros")
-  # The DALIC and superpoint-fit kernels (run_sums.h) pass GCC vector types (vector extensions) between always-inlined helpers;
-  # GCC's note that such arguments have another ABI without AVX concerns calls across objects,
-  # which never happen here.
+  # The DALIC and superpoint-fit kernels (simd.h, run_sums.h) pass GCC vector types between
+  # always-inlined helpers; GCC's note that such arguments have another ABI without AVX concerns
+  # calls across objects, which never happen here.
   set_property(SOURCE ${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp APPEND PROPERTY COMPILE_OPTIONS -Wno-psabi)
 endif()

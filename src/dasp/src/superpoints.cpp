@@ -100,10 +100,6 @@ DASP_VECTOR_CLONES int accumulateFitAny(const cv::Mat& labels, const PixelFeatur
                         : accumulateFit<false, false>(labels, features, rho, sums);
 }
 
-}  // namespace
-
-namespace {
-
 // Union-find over label runs with path halving.
 int findRoot(std::vector<int>& parent, int i) {
   while (parent[i] != i) {
