@@ -65,9 +65,9 @@ struct ClusterTerms {
   float depth;          // weight / R^2 of the depth term (kColorDepth2D)
   float z;              // depth of the centre (kColorDepth2D)
   float cr, cg, cb;     // -2 wc c_i
-  float cx, cy, cz;     // -2 (weight / R^2) p_i (d_DA)
+  float cx, cy, cz;     // -2 (weight / R^2) p_i, z scaled by 1 + weight_depth (d_DA)
   float cnx, cny, cnz;  // -wn n_i (d_DA)
-  float offset;         // wc |c_i|^2 (d_DA: + weight |p_i|^2 / R^2 + wn)
+  float offset;         // wc |c_i|^2 (d_DA: + weight (|p_i|^2 + weight_depth z_i^2) / R^2 + wn)
 };
 
 // The (reduced, see ClusterTerms) distance of pixels to cluster t, for one pixel (float, int)
@@ -330,14 +330,19 @@ struct Dalic::Impl {
     t.offset = wc * c.color.squaredNorm();
     const float inv_radius_m2 = 1.0f / (p.radius_m * p.radius_m);
     if (p.metric == MetricKind::kDepthAdaptive) {
+      // The extra depth term weight_depth (z - z_i)^2 expands like the rest: the pixel's own
+      // z^2 is the same for every cluster and is dropped.
       const float spatial = p.weight_spatial * inv_radius_m2;
+      const float depth_factor = 1.0f + p.weight_depth;
       t.cx = -2.0f * spatial * c.position.x();
       t.cy = -2.0f * spatial * c.position.y();
-      t.cz = -2.0f * spatial * c.position.z();
+      t.cz = -2.0f * spatial * depth_factor * c.position.z();
       t.cnx = -p.weight_normal * c.normal.x();
       t.cny = -p.weight_normal * c.normal.y();
       t.cnz = -p.weight_normal * c.normal.z();
-      t.offset += spatial * c.position.squaredNorm() + p.weight_normal;
+      t.offset +=
+          spatial * (c.position.squaredNorm() + p.weight_depth * c.position.z() * c.position.z()) +
+          p.weight_normal;
     } else {
       t.spatial = p.weight_spatial / (c.radius_px * c.radius_px);
       t.depth = p.weight_spatial * inv_radius_m2;
@@ -394,6 +399,9 @@ void Dalic::reset(const DalicParams& params) {
   }
   if (!(params.window_multiple > 0.0f)) {
     throw std::invalid_argument("DALIC: window_multiple must be positive");
+  }
+  if (!(params.weight_depth >= 0.0f) || !std::isfinite(params.weight_depth)) {
+    throw std::invalid_argument("DALIC: weight_depth must be finite and >= 0");
   }
   if (params.threads < 0) throw std::invalid_argument("DALIC: threads must be >= 0");
   params_ = params;

@@ -75,7 +75,8 @@ Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
   return cluster(dalic, features, density, dalic_params.radius_m, run);
 }
 
-// DALIC parameters of the RGB-D methods (DASP and the naive ASP_RGBD baseline) from one config.
+}  // namespace
+
 DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
                         int target_count) {
   DalicParams params;
@@ -83,6 +84,7 @@ DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radiu
   params.weight_spatial = config.weight_spatial;
   params.weight_color = config.weight_color;
   params.weight_normal = config.weight_normal;
+  params.weight_depth = config.weight_depth;
   params.window_multiple = config.window_multiple;
   params.radius_m = radius_m;
   params.min_size_fraction = config.min_size_fraction;
@@ -90,8 +92,6 @@ DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radiu
   params.threads = config.threads;
   return params;
 }
-
-}  // namespace
 
 struct DaspSegmenter::Buffers {
   PixelFeatures features;

@@ -65,16 +65,9 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
     seed_origin.push_back(-1);
   }
 
-  DalicParams params;
-  params.metric = MetricKind::kDepthAdaptive;
-  params.weight_spatial = dc.weight_spatial;
-  params.weight_color = dc.weight_color;
-  params.weight_normal = dc.weight_normal;
-  params.window_multiple = dc.window_multiple;
-  params.radius_m = radius;
-  params.min_size_fraction = dc.min_size_fraction;
-  params.target_count = dc.size_mode == SizeMode::kCount ? dc.superpixel_count : 0;
-  params.threads = dc.threads;
+  const DalicParams params =
+      dalicParams(dc, MetricKind::kDepthAdaptive, radius,
+                  dc.size_mode == SizeMode::kCount ? dc.superpixel_count : 0);
   Dalic dalic(features, density, params);
   dalic.initialize(seeds);
   for (int it = 0; it < dc.iterations; ++it) {

@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dasp/dasp.h"
+#include "dasp/metrics.h"
 #include "dasp/stages.h"
 #include "dasp_synthetic.h"
 
@@ -183,6 +184,47 @@ TEST(Dasp, SlantedPlaneSuperpixelsHaveEqualSurfaceAreaButDifferentPixelArea) {
     EXPECT_GT(entry.second->normal.dot(Eigen::Vector3f(std::sin(0.6f), 0, -std::cos(0.6f))),
               0.999f);
   }
+}
+
+// weight_depth > 0 penalises depth differences more than lateral ones: on a plane whose depth
+// grows along x, superpixels stretch along y (lines of equal depth), so the depth compression
+// error falls and the count stays.
+TEST(Dasp, DepthWeightStretchesSuperpixelsAlongEqualDepth) {
+  const RgbdFrame frame = test::slantedPlane(240, 180, 2.0f, 0.9f);  // about 52 degrees
+  const cv::Mat mask(180, 240, CV_8UC1, cv::Scalar(255));
+  DaspConfig config;
+  config.superpixel_count = 150;
+  const Superpixels isotropic = computeDasp(frame, config);
+  config.weight_depth = 4.0f;
+  const Superpixels weighted = computeDasp(frame, config);
+  EXPECT_NEAR(static_cast<double>(weighted.superpixels.size()), 150.0, 3.0);
+  // Pixel-weighted ratio of the superpixels' spread along x (the depth gradient) to along y.
+  const auto spreadRatio = [](const Superpixels& s) {
+    std::vector<double> n(s.superpixels.size(), 0.0), sx(n), sy(n), sxx(n), syy(n);
+    for (int y = 0; y < s.labels.rows; ++y) {
+      for (int x = 0; x < s.labels.cols; ++x) {
+        const auto l = static_cast<std::size_t>(s.labels.at<int>(y, x));
+        n[l] += 1.0;
+        sx[l] += x;
+        sy[l] += y;
+        sxx[l] += static_cast<double>(x) * x;
+        syy[l] += static_cast<double>(y) * y;
+      }
+    }
+    double var_x = 0.0, var_y = 0.0;
+    for (std::size_t l = 0; l < n.size(); ++l) {
+      var_x += sxx[l] - sx[l] * sx[l] / n[l];
+      var_y += syy[l] - sy[l] * sy[l] / n[l];
+    }
+    return std::sqrt(var_x / var_y);
+  };
+  const double ratio_isotropic = spreadRatio(isotropic), ratio_weighted = spreadRatio(weighted);
+  EXPECT_LT(ratio_weighted, 0.75 * ratio_isotropic);
+  const double ce_isotropic =
+      metrics::compressionScores(isotropic.labels, mask, frame.depth).compression_error;
+  const double ce_weighted =
+      metrics::compressionScores(weighted.labels, mask, frame.depth).compression_error;
+  EXPECT_LT(ce_weighted, 0.85 * ce_isotropic);
 }
 
 TEST(Dasp, SameSeedSameOutputAndThreadsAgree) {

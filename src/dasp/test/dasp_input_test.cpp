@@ -109,6 +109,13 @@ TEST(DaspInput, NonsensicalParameters) {
   const RgbdFrame frame = goodFrame();
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::iterations, 0)); }, "iterations");
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::weight_color, -1.0f)); }, "weights");
+  expectInvalid([&] { computeDasp(frame, with(&DaspConfig::weight_depth, -0.5f)); }, "weights");
+  expectInvalid(
+      [&] {
+        computeDasp(frame,
+                    with(&DaspConfig::weight_depth, std::numeric_limits<float>::quiet_NaN()));
+      },
+      "weights");
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::window_multiple, 0.0f)); }, "window");
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::threads, -2)); }, "threads");
   DaspConfig radius;

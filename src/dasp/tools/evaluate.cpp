@@ -80,6 +80,13 @@ int main(int argc, char** argv) {
   app.add_option("--seed", options.seed, "random seed (DASP family)")->capture_default_str();
   app.add_option("--max-slant-factor", options.max_slant_factor,
                  "DASP density clamp of the slant factor (DaspConfig::max_slant_factor)");
+  app.add_option("--dasp-weight-depth", options.weight_depth,
+                 "DASP extra weight of the depth component (DaspConfig::weight_depth)")
+      ->capture_default_str();
+  std::string name_suffix;
+  app.add_option("--name-suffix", name_suffix,
+                 "appended to every method name in the outputs (to merge runs with other "
+                 "options, e.g. DASP_wd1)");
   app.add_option("--vccs-seed-scale", options.vccs_seed_scale,
                  "VCCS seed resolution scale (see peers.h)")
       ->capture_default_str();
@@ -131,7 +138,7 @@ int main(int argc, char** argv) {
               Row row;
               row.frame = paths.name;
               row.frame_index = static_cast<int>(f);
-              row.method = dasp::peers::methodName(methods[m]);
+              row.method = dasp::peers::methodName(methods[m]) + name_suffix;
               row.method_index = static_cast<int>(m);
               row.k = k;
               try {
@@ -242,6 +249,7 @@ int main(int argc, char** argv) {
                               {"frames", frames.size()},
                               {"iterations", options.iterations},
                               {"seed", options.seed},
+                              {"dasp_weight_depth", options.weight_depth},
                               {"parallel_frames", threads},
                               {"mask", "object label > 0 and depth > 0"},
                               {"time_ms", "thread CPU time of the method call (single-threaded)"},

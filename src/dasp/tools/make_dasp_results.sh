@@ -17,6 +17,12 @@ cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate dasp_dasp_bench
 mkdir -p "${BUILD}/eval"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/main" \
   --methods DASP ASP_RGB ASP_RGBD SLIC SEEDS -k "${KS[@]}" -j "${JOBS}"
+# DASP with the extra depth weight (DaspConfig::weight_depth): the trade-off of depth compression
+# error against compactness, as methods DASP_wd<w>.
+for wd in 0.25 1; do
+  "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_wd${wd}" \
+    --methods DASP --dasp-weight-depth "${wd}" --name-suffix "_wd${wd}" -k "${KS[@]}" -j "${JOBS}"
+done
 # PCL supervoxels are the slowest method: one separate pass per K.
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
   --methods VCCS -k "${KS[@]}" -j "${JOBS}"
@@ -25,4 +31,5 @@ DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetition
   --benchmark_report_aggregates_only=true --benchmark_min_time=0.2 > "${BUILD}/bench.txt"
 /usr/bin/python3 "${REPO}/src/dasp/tools/make_dasp_results.py" --out "${REPO}/docs/results" \
   --bench "${BUILD}/bench.txt" \
-  --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs"
+  --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
+  "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1"

@@ -60,6 +60,12 @@ struct DaspConfig {
   float weight_spatial = 1.0f;  ///< mu_v: weight of the 3D compactness term |p - p_i|^2 / R^2.
   float weight_color = 2.0f;    ///< mu_c: weight of the RGB term |c - c_i|^2, colours in [0, 1].
   float weight_normal = 3.0f;   ///< mu_n: weight of the normal term 1 - n . n_i.
+  /// Extra weight of the depth (camera z) component in the 3D compactness term, which becomes
+  /// mu_v (|p - p_i|^2 + weight_depth (z - z_i)^2) / R^2. 0 (default) is the thesis' isotropic
+  /// d_DA. Larger values stretch superpixels along lines of equal depth: the depth compression
+  /// error falls and so do compactness and boundary recall (the thesis' "direct competition"
+  /// of compression error and compactness, app. A). Costs no time. >= 0.
+  float weight_depth = 0.0f;
   /// DALIC search window half-size as a multiple of the cluster's projected radius (C in alg. 3).
   float window_multiple = 1.5f;
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;

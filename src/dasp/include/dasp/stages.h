@@ -106,6 +106,7 @@ struct DalicParams {
   float weight_spatial = 1.0f;
   float weight_color = 2.0f;
   float weight_normal = 3.0f;
+  float weight_depth = 0.0f;  ///< kDepthAdaptive only, see DaspConfig::weight_depth.
   float window_multiple = 1.5f;
   float radius_m = 0.02f;  ///< R for kDepthAdaptive / kColorDepth2D (metres).
   /// Purge clusters with fewer pixels than this fraction of their expected area 1/rho.
@@ -115,6 +116,12 @@ struct DalicParams {
   int target_count = 0;
   int threads = 1;  ///< 1 = single-threaded, 0 = all cores.
 };
+
+/// DALIC parameters of the RGB-D methods (DASP, streaming DASP, the naive ASP_RGBD baseline)
+/// from one config: its weights, window, purge fraction and threads, with the given metric,
+/// radius R (metres) and count-control target (0 = none).
+DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
+                        int target_count);
 
 /// A DALIC cluster (superpixel centre) and its mean features.
 struct Cluster {

@@ -73,6 +73,7 @@ MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOption
       config.seed = options.seed;
       config.threads = options.threads;
       config.max_slant_factor = options.max_slant_factor;
+      config.weight_depth = options.weight_depth;
       Superpixels s =
           method == Method::kDasp ? computeDasp(frame, config) : computeAspRgbd(frame, config);
       result.labels = std::move(s.labels);

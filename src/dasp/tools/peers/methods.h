@@ -32,6 +32,7 @@ struct MethodOptions {
   int threads = 1;              ///< Threads inside DASP / ASP (1 = single core, 0 = all).
   float vccs_seed_scale = VccsConfig{}.seed_scale;         ///< See VccsConfig::seed_scale.
   float max_slant_factor = DaspConfig{}.max_slant_factor;  ///< DASP density clamp (dasp.h).
+  float weight_depth = DaspConfig{}.weight_depth;          ///< DASP depth weight (dasp.h).
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
