@@ -351,6 +351,62 @@ struct Dalic::Impl {
     return t;
   }
 
+  // The pixel of a seed (rounded, clamped to the image).
+  static cv::Point seedPixel(const PixelFeatures& f, const Seed& seed) {
+    return {std::clamp(static_cast<int>(std::lround(seed.u)), 0, f.width - 1),
+            std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1)};
+  }
+
+  // The cluster of a seed: mean features of a small window around it. False if the window
+  // holds no valid pixel (the seed is dropped).
+  static bool seedCluster(const Dalic& self, const Seed& seed, int seed_index, Cluster& c) {
+    const PixelFeatures& f = self.features_;
+    const cv::Point centre = seedPixel(f, seed);
+    const int cx = centre.x, cy = centre.y;
+    const float seed_density =
+        self.density_.ptr<float>()[static_cast<std::size_t>(cy) * f.width + cx];
+    const float nominal =
+        seed_density > 0.0f ? 1.0f / std::sqrt(kPi * seed_density) : 3.0f;  // R_rho, pixels
+    const int reach = std::clamp(static_cast<int>(std::lround(0.3f * nominal)), 1, 4);
+    c = Cluster{};
+    c.u = static_cast<float>(cx);
+    c.v = static_cast<float>(cy);
+    // Plain float sums over the window (valid pixels only: invalid ones have zero features
+    // but must not count).
+    float sum[9] = {};
+    int count = 0;
+    const bool depth = f.hasDepth();
+    for (int y = std::max(0, cy - reach); y <= std::min(f.height - 1, cy + reach); ++y) {
+      const std::size_t base = static_cast<std::size_t>(y) * f.width;
+      for (int x = std::max(0, cx - reach); x <= std::min(f.width - 1, cx + reach); ++x) {
+        const std::size_t i = base + x;
+        const float w = f.valid[i] ? 1.0f : 0.0f;
+        count += f.valid[i];
+        sum[0] += w * f.r[i];
+        sum[1] += w * f.g[i];
+        sum[2] += w * f.b[i];
+        if (depth) {  // invalid pixels have zero points and normals
+          sum[3] += f.x[i];
+          sum[4] += f.y[i];
+          sum[5] += f.z[i];
+          sum[6] += f.nx[i];
+          sum[7] += f.ny[i];
+          sum[8] += f.nz[i];
+        }
+      }
+    }
+    if (count == 0) return false;  // seed without any valid pixel nearby
+    const Eigen::Vector3f normal_sum(sum[6], sum[7], sum[8]);
+    c.color = Eigen::Vector3f(sum[0], sum[1], sum[2]) / static_cast<float>(count);
+    c.position = Eigen::Vector3f(sum[3], sum[4], sum[5]) / static_cast<float>(count);
+    c.normal = normal_sum.norm() > 0.0f ? Eigen::Vector3f(normal_sum.normalized())
+                                        : Eigen::Vector3f(-Eigen::Vector3f::UnitZ());
+    c.radius_px = radiusPx(self, c.position.z(), seed_density);
+    c.mass = 1.0f;
+    c.origin = seed_index;
+    return true;
+  }
+
   // Projected radius of a cluster in pixels: R f / z for DASP, R_rho (def. 5) from the mean
   // density otherwise.
   static float radiusPx(const Dalic& self, float depth, float mean_density) {
@@ -362,15 +418,18 @@ struct Dalic::Impl {
   }
 };
 
-// Working memory of assign() and update(): kept from call to call, so that the iterations
-// allocate nothing once the buffers have grown to the cluster count.
+// Working memory of initialize(), assign() and update(): kept from call to call, so that the
+// iterations allocate nothing once the buffers have grown to the cluster count.
 struct Dalic::Scratch {
-  std::vector<ClusterTerms> terms;             // assign(): the distance constants of every cluster
-  std::vector<std::vector<int>> spans;         // assign(): span buckets, one per row stripe
-  std::vector<float> accumulators;             // update(): kClusterAccSize per stripe and cluster
-  std::vector<Cluster> next_clusters;          // update()'s output, swapped with clusters_
+  std::vector<ClusterTerms> terms;      // assign(): the distance constants of every cluster
+  std::vector<std::vector<int>> spans;  // assign(): span buckets, one per row stripe
+  std::vector<float> accumulators;      // update(): kClusterAccSize per stripe and cluster
+  std::vector<Cluster> next_clusters;   // update()'s output, swapped with clusters_; initialize()'s
+                                        // clusters in seed order
   std::vector<std::pair<float, int>> by_mass;  // count control: (mass, index) per cluster
-  std::vector<std::uint8_t> drop;              // count control: clusters to drop
+  std::vector<std::uint8_t> drop;   // count control: clusters to drop; initialize(): seeds kept
+  std::vector<int> seed_row_start;  // initialize(): seeds per row, then row starts
+  std::vector<int> seed_order;      // initialize(): seed indices in row order
 };
 
 Dalic::Dalic(const PixelFeatures& features, const cv::Mat& density, const DalicParams& params)
@@ -420,56 +479,35 @@ cv::Mat Dalic::labels() const {
 
 void Dalic::initialize(const std::vector<Seed>& seeds) {
   const PixelFeatures& f = features_;
-  const float* density = density_.ptr<float>();
+  Scratch& scratch = *scratch_;
+  // The seeds come in sampling order, scattered over the image, and each reads a small window
+  // of ten feature arrays that do not fit in the L2 cache: visited in row order (a counting
+  // sort by row), neighbouring windows share cache lines, which halves initialize() at large K.
+  // The clusters keep the seed order (it decides ties in assign()).
+  const std::size_t n = seeds.size();
+  std::vector<int>& row_start = scratch.seed_row_start;
+  row_start.assign(static_cast<std::size_t>(f.height) + 1, 0);
+  for (const Seed& seed : seeds) ++row_start[static_cast<std::size_t>(Impl::seedPixel(f, seed).y)];
+  int first = 0;
+  for (int& start : row_start) first += std::exchange(start, first);
+  std::vector<int>& order = scratch.seed_order;
+  order.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    order[static_cast<std::size_t>(row_start[Impl::seedPixel(f, seeds[i]).y]++)] =
+        static_cast<int>(i);
+  }
+  std::vector<Cluster>& built = scratch.next_clusters;
+  built.resize(n);
+  std::vector<std::uint8_t>& kept = scratch.drop;
+  kept.resize(n);
+  for (int i : order) {
+    const auto index = static_cast<std::size_t>(i);
+    kept[index] = Impl::seedCluster(*this, seeds[index], i, built[index]) ? 1 : 0;
+  }
   clusters_.clear();
-  clusters_.reserve(seeds.size());
-  for (std::size_t seed_index = 0; seed_index < seeds.size(); ++seed_index) {
-    const Seed& seed = seeds[seed_index];
-    const int cx = std::clamp(static_cast<int>(std::lround(seed.u)), 0, f.width - 1);
-    const int cy = std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1);
-    const float seed_density = density[static_cast<std::size_t>(cy) * f.width + cx];
-    const float nominal =
-        seed_density > 0.0f ? 1.0f / std::sqrt(kPi * seed_density) : 3.0f;  // R_rho, pixels
-    const int reach = std::clamp(static_cast<int>(std::lround(0.3f * nominal)), 1, 4);
-    Cluster c;
-    c.u = static_cast<float>(cx);
-    c.v = static_cast<float>(cy);
-    // Plain float sums over the window (valid pixels only: invalid ones have zero features
-    // but must not count).
-    float sum[9] = {};
-    int count = 0;
-    const bool depth = f.hasDepth();
-    for (int y = std::max(0, cy - reach); y <= std::min(f.height - 1, cy + reach); ++y) {
-      const std::size_t base = static_cast<std::size_t>(y) * f.width;
-      for (int x = std::max(0, cx - reach); x <= std::min(f.width - 1, cx + reach); ++x) {
-        const std::size_t i = base + x;
-        const float w = f.valid[i] ? 1.0f : 0.0f;
-        count += f.valid[i];
-        sum[0] += w * f.r[i];
-        sum[1] += w * f.g[i];
-        sum[2] += w * f.b[i];
-        if (depth) {  // invalid pixels have zero points and normals
-          sum[3] += f.x[i];
-          sum[4] += f.y[i];
-          sum[5] += f.z[i];
-          sum[6] += f.nx[i];
-          sum[7] += f.ny[i];
-          sum[8] += f.nz[i];
-        }
-      }
-    }
-    const Eigen::Vector3f normal_sum(sum[6], sum[7], sum[8]);
-    c.color = Eigen::Vector3f(sum[0], sum[1], sum[2]);
-    c.position = Eigen::Vector3f(sum[3], sum[4], sum[5]);
-    if (count == 0) continue;  // seed without any valid pixel nearby: drop it
-    c.color /= static_cast<float>(count);
-    c.position /= static_cast<float>(count);
-    c.normal = normal_sum.norm() > 0.0f ? Eigen::Vector3f(normal_sum.normalized())
-                                        : Eigen::Vector3f(-Eigen::Vector3f::UnitZ());
-    c.radius_px = Impl::radiusPx(*this, c.position.z(), seed_density);
-    c.mass = 1.0f;
-    c.origin = static_cast<int>(seed_index);
-    clusters_.push_back(c);
+  clusters_.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (kept[i]) clusters_.push_back(built[i]);
   }
 }
 

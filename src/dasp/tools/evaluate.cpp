@@ -227,7 +227,7 @@ int main(int argc, char** argv) {
           sum["wall_ms"] += r.wall_ms;
           for (const auto& [n, v] : r.metrics) sum[n] += v;
         }
-        const std::string method = dasp::peers::methodName(methods[m]);
+        const std::string method = dasp::peers::methodName(methods[m]) + name_suffix;
         std::vector<std::string> line = {method, std::to_string(k), std::to_string(ok),
                                          std::to_string(failed)};
         nlohmann::json j = {
