@@ -218,10 +218,27 @@ void BM_DaspCount(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(computeDasp(bench::benchFrame(), c));
 }
 // K from 250 to 4000 (superpixels of 1230 to 77 pixels at 640x480).
+constexpr int kCounts[] = {250, 500, 1000, 2000, 4000};
 void countArgs(benchmark::internal::Benchmark* b) {
-  b->ArgName("K")->Arg(250)->Arg(500)->Arg(1000)->Arg(2000)->Arg(4000);
+  b->ArgName("K");
+  for (int k : kCounts) b->Arg(k);
 }
 BENCHMARK(BM_DaspCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
+
+// The DASP stages as BM_DaspStagesCount times them, and their counter names.
+enum Stage {
+  kFeatures,
+  kDensity,
+  kSampling,
+  kInit,
+  kAssign,
+  kUpdate,
+  kConnectivity,
+  kFit,
+  kStages
+};
+constexpr const char* kStageNames[kStages] = {"features", "density", "sampling",     "init",
+                                              "assign",   "update",  "connectivity", "fit"};
 
 // Where the growth with K comes from: the DASP stages one by one (the steps computeDasp takes,
 // buffers kept across frames as in DaspSegmenter), each timed in thread CPU time; the counters
@@ -234,17 +251,6 @@ void BM_DaspStagesCount(benchmark::State& state) {
   Dalic dalic(fx.features, fx.density, fx.params);
   const cv::Mat valid(fx.features.height, fx.features.width, CV_8UC1, fx.features.valid.data());
   const cv::Mat depth(fx.features.height, fx.features.width, CV_32FC1, fx.features.z.data());
-  enum Stage {
-    kFeatures,
-    kDensity,
-    kSampling,
-    kInit,
-    kAssign,
-    kUpdate,
-    kConnectivity,
-    kFit,
-    kStages
-  };
   double ms[kStages] = {};
   for (auto _ : state) {
     double t = bench::threadCpuMs();
@@ -275,9 +281,7 @@ void BM_DaspStagesCount(benchmark::State& state) {
     lap(kFit);
   }
   const double n = static_cast<double>(state.iterations());
-  const char* names[kStages] = {"features", "density", "sampling",     "init",
-                                "assign",   "update",  "connectivity", "fit"};
-  for (int stage = 0; stage < kStages; ++stage) state.counters[names[stage]] = ms[stage] / n;
+  for (int stage = 0; stage < kStages; ++stage) state.counters[kStageNames[stage]] = ms[stage] / n;
 }
 BENCHMARK(BM_DaspStagesCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
 
@@ -386,7 +390,7 @@ int main(int argc, char** argv) {
                slic_k1000 = find("BM_OpenCvSlicCount/K:1000");
   if (dasp_k1000 > 0) {
     std::printf("runtime against K (single-threaded, relative to K = 1000):\n");
-    for (int k : {250, 500, 1000, 2000, 4000}) {
+    for (int k : kCounts) {
       const double dasp_k = find("BM_DaspCount/K:" + std::to_string(k));
       const double slic_k = find("BM_OpenCvSlicCount/K:" + std::to_string(k));
       if (dasp_k <= 0) continue;
@@ -405,15 +409,13 @@ int main(int argc, char** argv) {
     return it == reporter.counters.end() ? -1.0 : it->second;
   };
   if (stageMs(1000, "assign") > 0) {
-    const char* stages[] = {"features", "density", "sampling",     "init",
-                            "assign",   "update",  "connectivity", "fit"};
     std::printf("DASP stages against K (single-threaded, CPU ms per frame):\n       ");
-    for (const char* stage : stages) std::printf(" %12s", stage);
+    for (const char* stage : kStageNames) std::printf(" %12s", stage);
     std::printf("\n");
-    for (int k : {250, 500, 1000, 2000, 4000}) {
+    for (int k : kCounts) {
       if (stageMs(k, "assign") < 0) continue;
       std::printf("  K = %4d", k);
-      for (const char* stage : stages) std::printf(" %12.2f", stageMs(k, stage));
+      for (const char* stage : kStageNames) std::printf(" %12.2f", stageMs(k, stage));
       std::printf("\n");
     }
   }

@@ -357,9 +357,9 @@ struct Dalic::Impl {
             std::clamp(static_cast<int>(std::lround(seed.v)), 0, f.height - 1)};
   }
 
-  // The cluster of a seed: mean features of a small window around it. False if the window
-  // holds no valid pixel (the seed is dropped).
-  static bool seedCluster(const Dalic& self, const Seed& seed, int seed_index, Cluster& c) {
+  // The cluster of a seed: mean features of a small window around it. If the window holds no
+  // valid pixel the seed is dropped: c keeps origin -1.
+  static void seedCluster(const Dalic& self, const Seed& seed, int seed_index, Cluster& c) {
     const PixelFeatures& f = self.features_;
     const cv::Point centre = seedPixel(f, seed);
     const int cx = centre.x, cy = centre.y;
@@ -395,7 +395,7 @@ struct Dalic::Impl {
         }
       }
     }
-    if (count == 0) return false;  // seed without any valid pixel nearby
+    if (count == 0) return;  // seed without any valid pixel nearby
     const Eigen::Vector3f normal_sum(sum[6], sum[7], sum[8]);
     c.color = Eigen::Vector3f(sum[0], sum[1], sum[2]) / static_cast<float>(count);
     c.position = Eigen::Vector3f(sum[3], sum[4], sum[5]) / static_cast<float>(count);
@@ -404,7 +404,6 @@ struct Dalic::Impl {
     c.radius_px = radiusPx(self, c.position.z(), seed_density);
     c.mass = 1.0f;
     c.origin = seed_index;
-    return true;
   }
 
   // Projected radius of a cluster in pixels: R f / z for DASP, R_rho (def. 5) from the mean
@@ -424,12 +423,12 @@ struct Dalic::Scratch {
   std::vector<ClusterTerms> terms;      // assign(): the distance constants of every cluster
   std::vector<std::vector<int>> spans;  // assign(): span buckets, one per row stripe
   std::vector<float> accumulators;      // update(): kClusterAccSize per stripe and cluster
-  std::vector<Cluster> next_clusters;   // update()'s output, swapped with clusters_; initialize()'s
-                                        // clusters in seed order
+  // update()'s output, swapped with clusters_; initialize(): one cluster per seed, in seed order
+  std::vector<Cluster> next_clusters;
   std::vector<std::pair<float, int>> by_mass;  // count control: (mass, index) per cluster
-  std::vector<std::uint8_t> drop;   // count control: clusters to drop; initialize(): seeds kept
-  std::vector<int> seed_row_start;  // initialize(): seeds per row, then row starts
-  std::vector<int> seed_order;      // initialize(): seed indices in row order
+  std::vector<std::uint8_t> drop;              // count control: clusters to drop
+  std::vector<int> seed_row_start;             // initialize(): seeds per row, then row starts
+  std::vector<int> seed_order;                 // initialize(): seed indices in row order
 };
 
 Dalic::Dalic(const PixelFeatures& features, const cv::Mat& density, const DalicParams& params)
@@ -459,8 +458,11 @@ void Dalic::reset(const DalicParams& params) {
   if (!(params.window_multiple > 0.0f)) {
     throw std::invalid_argument("DALIC: window_multiple must be positive");
   }
-  if (!(params.weight_depth >= 0.0f) || !std::isfinite(params.weight_depth)) {
-    throw std::invalid_argument("DALIC: weight_depth must be finite and >= 0");
+  for (const float weight :
+       {params.weight_spatial, params.weight_color, params.weight_normal, params.weight_depth}) {
+    if (!(weight >= 0.0f) || !std::isfinite(weight)) {
+      throw std::invalid_argument("DALIC: metric weights must be finite and >= 0");
+    }
   }
   if (params.threads < 0) throw std::invalid_argument("DALIC: threads must be >= 0");
   params_ = params;
@@ -498,16 +500,14 @@ void Dalic::initialize(const std::vector<Seed>& seeds) {
   }
   std::vector<Cluster>& built = scratch.next_clusters;
   built.resize(n);
-  std::vector<std::uint8_t>& kept = scratch.drop;
-  kept.resize(n);
   for (int i : order) {
-    const auto index = static_cast<std::size_t>(i);
-    kept[index] = Impl::seedCluster(*this, seeds[index], i, built[index]) ? 1 : 0;
+    Impl::seedCluster(*this, seeds[static_cast<std::size_t>(i)], i,
+                      built[static_cast<std::size_t>(i)]);
   }
   clusters_.clear();
   clusters_.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (kept[i]) clusters_.push_back(built[i]);
+  for (const Cluster& c : built) {
+    if (c.origin >= 0) clusters_.push_back(c);  // dropped seeds keep origin -1
   }
 }
 

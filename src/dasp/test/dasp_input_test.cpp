@@ -124,6 +124,22 @@ TEST(DaspInput, NonsensicalParameters) {
   expectInvalid([&] { computeDasp(frame, radius); }, "radius_m");
 }
 
+TEST(DalicInput, MetricWeightsMustBeFiniteAndNonNegative) {
+  const PixelFeatures features = computeFeatures(goodFrame());
+  const cv::Mat density(features.height, features.width, CV_32FC1, cv::Scalar(0.01f));
+  EXPECT_NO_THROW(Dalic(features, density, DalicParams{}));
+  expectInvalid([&] { Dalic(features, density, with(&DalicParams::weight_color, -1.0f)); },
+                "weights");
+  expectInvalid([&] { Dalic(features, density, with(&DalicParams::weight_depth, -0.5f)); },
+                "weights");
+  expectInvalid(
+      [&] {
+        Dalic(features, density,
+              with(&DalicParams::weight_normal, std::numeric_limits<float>::infinity()));
+      },
+      "weights");
+}
+
 TEST(DaspInput, BadUserDensity) {
   const cv::Mat color = test::flatColor(32, 24);
   AspConfig config;

@@ -104,6 +104,11 @@ int main(int argc, char** argv) {
   try {
     std::vector<dasp::peers::Method> methods;
     for (const std::string& name : method_names) methods.push_back(dasp::peers::parseMethod(name));
+    // The names in the outputs, with the suffix of this run.
+    std::vector<std::string> output_names;
+    for (const dasp::peers::Method method : methods) {
+      output_names.push_back(dasp::peers::methodName(method) + name_suffix);
+    }
     for (int k : counts) {
       if (k < 1) throw std::invalid_argument("every K must be >= 1");
     }
@@ -138,7 +143,7 @@ int main(int argc, char** argv) {
               Row row;
               row.frame = paths.name;
               row.frame_index = static_cast<int>(f);
-              row.method = dasp::peers::methodName(methods[m]) + name_suffix;
+              row.method = output_names[m];
               row.method_index = static_cast<int>(m);
               row.k = k;
               try {
@@ -227,7 +232,7 @@ int main(int argc, char** argv) {
           sum["wall_ms"] += r.wall_ms;
           for (const auto& [n, v] : r.metrics) sum[n] += v;
         }
-        const std::string method = dasp::peers::methodName(methods[m]) + name_suffix;
+        const std::string& method = output_names[m];
         std::vector<std::string> line = {method, std::to_string(k), std::to_string(ok),
                                          std::to_string(failed)};
         nlohmann::json j = {

@@ -194,18 +194,18 @@ def main():
     variants = [m for m in methods if m.startswith("DASP_wd")]
     if variants:
         md.append("## Depth compression error against compactness (DaspConfig::weight_depth)\n")
+        vccs_co = [rows[("VCCS", k)]["co_ipq"] for k in ks if ("VCCS", k) in rows]
+        vccs_text = (f" (VCCS: CO {min(vccs_co):.2f}-{max(vccs_co):.2f} over these K)"
+                     if vccs_co else "")
         md.append("The thesis' d_DA is isotropic in 3D, so DASP superpixels are compact discs on "
-                  "the surface. On a slanted surface such a disc spans a range of depths, and "
-                  "that is most of the depth CE. PCL VCCS has a lower depth CE at small K "
-                  "because its superpixels are much less compact (CO about 0.65): they reach "
-                  "further along lines of equal depth. DASP's 3D-position CE is about the same "
-                  "as VCCS's. `DaspConfig::weight_depth` (default 0, the thesis) adds "
-                  "weight_depth (z - z_i)^2 / R^2 to the compactness term. The rows below, "
-                  "DASP_wd<w>, are DASP with weight_depth = w; everything else is at its "
-                  "default. They show the trade-off the thesis names (app. A: compression error "
-                  "'stands in direct competition to superpixel compactness'). No setting has "
-                  "both the original's compactness and recall and a lower depth CE than VCCS "
-                  "at K <= 1000.\n")
+                  "the surface; on a slanted surface such a disc spans a range of depths. "
+                  "`DaspConfig::weight_depth` (default 0, the thesis) adds "
+                  "weight_depth (z - z_i)^2 / R^2 to the compactness term, which stretches "
+                  "superpixels along lines of equal depth. The rows DASP_wd<w> are DASP with "
+                  "weight_depth = w, everything else at its default, beside the default DASP and "
+                  "PCL VCCS" + vccs_text + ". They show the trade-off the thesis names (app. A: "
+                  "compression error 'stands in direct competition to superpixel compactness'): "
+                  "depth CE against CO, Rec and UE.\n")
         md.append("| K | method | in mask | CE depth mm | CE 3D mm | CO | Rec | UE NP |")
         md.append("|---|---|---|---|---|---|---|---|")
         for k in ks:

@@ -64,7 +64,8 @@ struct DaspConfig {
   /// mu_v (|p - p_i|^2 + weight_depth (z - z_i)^2) / R^2. 0 (default) is the thesis' isotropic
   /// d_DA. Larger values stretch superpixels along lines of equal depth: the depth compression
   /// error falls and so do compactness and boundary recall (the thesis' "direct competition"
-  /// of compression error and compactness, app. A). Costs no time. >= 0.
+  /// of compression error and compactness, app. A). The distance keeps its number of
+  /// operations (only per-cluster constants change). >= 0.
   float weight_depth = 0.0f;
   /// DALIC search window half-size as a multiple of the cluster's projected radius (C in alg. 3).
   float window_multiple = 1.5f;

@@ -174,7 +174,7 @@ class Dalic {
   std::vector<Cluster> clusters_;
   std::vector<int> labels_;
   std::vector<float> distance_;
-  struct Scratch;  // working memory of assign() and update(), kept from call to call
+  struct Scratch;  // working memory of initialize(), assign() and update(), kept across calls
   std::unique_ptr<Scratch> scratch_;
 };
 
