@@ -26,7 +26,10 @@ std::string linkPath() {
   return edvs_driver::parseDeviceUri(uri).path;
 }
 
-/// Collects EventArray messages from a topic.
+/// Collects EventArray messages from a topic. The subscriber is the last member: it is
+/// subscribed after the buffers exist and unsubscribed (which waits for a callback in flight on
+/// the spinner threads) before they are destroyed. Declared first, it let late messages of the
+/// driver land in destroyed vectors at the end of a test (an abort in one clean-clone run).
 class EventSink {
  public:
   EventSink(ros::NodeHandle& nh, const std::string& topic)
@@ -52,9 +55,9 @@ class EventSink {
 
  private:
   std::mutex mutex_;
-  ros::Subscriber sub_;
   std::vector<ebslam_msgs::EventArray> messages_;
   ebslam::EventVector events_;
+  ros::Subscriber sub_;
 };
 
 bool waitFor(const std::function<bool()>& done, double timeout_s) {
