@@ -130,6 +130,19 @@ TEST(Dasp, SeparatesSameColourPlanesThatColourOnlyCannot) {
   EXPECT_GT(rgb_straddling, 0.15);
 }
 
+// A 3 % depth step (1.00 m against 1.03 m, same colour) is a discontinuity for the default
+// depth_jump_ratio (0.02): no superpixel spans it. With the former 0.05, connectivity joins
+// pixels across it and some superpixels do.
+TEST(Dasp, SmallDepthStepIsADiscontinuity) {
+  cv::Mat near_mask;
+  const RgbdFrame frame = test::twoPlanes(160, 120, 1.0f, 1.03f, &near_mask);
+  DaspConfig config;
+  config.superpixel_count = 80;
+  EXPECT_EQ(straddlingFraction(computeDasp(frame, config), near_mask, 0.0), 0.0);
+  config.depth_jump_ratio = 0.05f;
+  EXPECT_GT(straddlingFraction(computeDasp(frame, config), near_mask, 0.0), 0.0);
+}
+
 TEST(Dasp, SlantedPlaneSuperpixelsHaveEqualSurfaceAreaButDifferentPixelArea) {
   const RgbdFrame frame = test::slantedPlane(240, 180, 2.0f, 0.6f);  // about 34 degrees
   DaspConfig config;

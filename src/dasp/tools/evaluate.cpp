@@ -83,6 +83,10 @@ int main(int argc, char** argv) {
   app.add_option("--dasp-weight-depth", options.weight_depth,
                  "DASP extra weight of the depth component (DaspConfig::weight_depth)")
       ->capture_default_str();
+  app.add_option("--depth-jump-ratio", options.depth_jump_ratio,
+                 "DASP/ASP_RGBD relative depth jump of a discontinuity "
+                 "(DaspConfig::depth_jump_ratio)")
+      ->capture_default_str();
   std::string name_suffix;
   app.add_option("--name-suffix", name_suffix,
                  "appended to every method name in the outputs (to merge runs with other "
@@ -255,6 +259,7 @@ int main(int argc, char** argv) {
                               {"iterations", options.iterations},
                               {"seed", options.seed},
                               {"dasp_weight_depth", options.weight_depth},
+                              {"depth_jump_ratio", options.depth_jump_ratio},
                               {"parallel_frames", threads},
                               {"mask", "object label > 0 and depth > 0"},
                               {"time_ms", "thread CPU time of the method call (single-threaded)"},

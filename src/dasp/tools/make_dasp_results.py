@@ -30,7 +30,12 @@ STYLE = {
     "VCCS": dict(color="tab:orange", marker="P"),
     "DASP_wd0.25": dict(color="tab:red", marker="o", linestyle="--", alpha=0.6),
     "DASP_wd1": dict(color="tab:red", marker="o", linestyle=":", alpha=0.6),
+    "DASP_jump0.05": dict(color="tab:brown", marker="o", linestyle="--", alpha=0.6),
 }
+# Superpixels the thesis author's original DASP delivers in the mask when asked for K = 1000
+# (issue 3 anchor table): DASP is also run at this K, to compare at the same count. The row
+# is reported beside the anchor, not in the tables and plots over K.
+ORIGINAL_COUNT = 923
 # (column, title, better) for the plots.
 PLOTS = [
     ("boundary_recall", "Boundary recall (2 px)", "higher"),
@@ -75,10 +80,14 @@ def fmt(v, digits):
     return "" if v == "" else f"{v:.{digits}f}"
 
 
+def counts_of(rows):
+    return sorted({k for _, k in rows} - {ORIGINAL_COUNT})
+
+
 def plot(rows, out_dir):
     files = []
     methods = methods_of(rows)
-    ks = sorted({k for _, k in rows})
+    ks = counts_of(rows)
     fig, axes = plt.subplots(3, 4, figsize=(18, 12))
     for ax, (col, title, better) in zip(axes.flat, PLOTS):
         for m in methods:
@@ -151,9 +160,11 @@ def main():
         raise SystemExit("no rows in " + " ".join(args.folders))
     plots = plot(rows, args.out)
     methods = methods_of(rows)
-    ks = sorted({k for _, k in rows})
+    ks = counts_of(rows)
     frames = sorted({int(m.get("frames", 0)) for _, m in meta})
 
+    main_meta = next((m for f, m in meta if os.path.basename(f.rstrip("/")) == "main"), {})
+    jump_ratio = float(main_meta.get("depth_jump_ratio", 0.05))  # runs before it had 0.05
     md = []
     md.append("# DASP: superpixel quality and speed on the OSD learn frames\n")
     source = args.source or f"commit `{git_head()}`"
@@ -166,7 +177,7 @@ def main():
               "SEEDS 4 levels, 4 iterations; PCL VCCS (PCL tutorial weights) with its seed "
               "resolution rescaled per frame until it delivers K within 2 % (at most 6 runs; "
               "the time is per run). DASP enforces connectivity on the surface (no superpixel "
-              "spans a depth jump of more than 5 %).\n")
+              f"spans a depth jump of more than {100 * jump_ratio:.3g} % of the depth).\n")
     md.append("## K = 1000, the columns of the issue's anchor table\n")
     md.append("Means over all frames. Rec = boundary recall at 2 px (normalised by the "
               "ground-truth boundary), UE = Neubert-Protzel undersegmentation error, ASA = "
@@ -191,6 +202,12 @@ def main():
               "UE 0.0037, ASA 0.9982, CE depth 6.9 mm, CO 0.95, about 60 ms; PCL VCCS: 1013, "
               "0.966, 0.0050, 0.9976, 6.7 mm, 0.64, 100-130 ms; OpenCV SLIC K = 2000: 1386, 0.966, "
               "0.016, 0.992, 15.3 mm, 0.96, 100-140 ms.\n")
+    r = rows.get(("DASP", ORIGINAL_COUNT))
+    if r:
+        md.append(f"At the original's count (DASP asked for K = {ORIGINAL_COUNT}, the number the "
+                  f"original delivers for K = 1000): {r['superpixels_in_mask']:.0f} in mask, Rec "
+                  f"{r['boundary_recall']:.3f}, UE {r['ue_np']:.4f}, ASA {r['asa']:.4f}, CE depth "
+                  f"{r['ce_depth_mm']:.2f} mm, CO {r['co_ipq']:.3f}.\n")
     variants = [m for m in methods if m.startswith("DASP_wd")]
     if variants:
         md.append("## Depth compression error against compactness (DaspConfig::weight_depth)\n")
@@ -216,6 +233,23 @@ def main():
                               f"{r['ce_depth_mm']:.2f} | {r['ce_position_mm']:.2f} | "
                               f"{r['co_ipq']:.3f} | {r['boundary_recall']:.3f} | "
                               f"{r['ue_np']:.4f} |")
+        md.append("")
+    jumps = [m for m in methods if m.startswith("DASP_jump")]
+    if jumps:
+        md.append("## Depth-jump ratio (DaspConfig::depth_jump_ratio)\n")
+        md.append(f"DASP (depth_jump_ratio = {jump_ratio:.3g}, the default) beside DASP_jump<r>, "
+                  "DASP with depth_jump_ratio = r and everything else at its default. The ratio "
+                  "decides where the normals switch to one-sided differences and which "
+                  "4-neighbours connectivity enforcement connects (dasp.h gives the reasons for "
+                  "the default).\n")
+        md.append("| K | method | Rec | UE NP | ASA | CE depth mm | CO |")
+        md.append("|---|---|---|---|---|---|---|")
+        for k in ks:
+            for m in ["DASP"] + jumps:
+                r = rows.get((m, k))
+                if r:
+                    md.append(f"| {k} | {m} | {r['boundary_recall']:.4f} | {r['ue_np']:.5f} | "
+                              f"{r['asa']:.5f} | {r['ce_depth_mm']:.2f} | {r['co_ipq']:.3f} |")
         md.append("")
     md.append("## All metrics per method and K\n")
     cols = [("superpixels", "delivered", 0), ("superpixels_in_mask", "in mask", 0),
@@ -293,12 +327,14 @@ def main():
               "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, DASP with weight_depth 0.25 and 1 "
-              "in two more, PCL VCCS in the last), frames in "
+              f"in two more, DASP with depth_jump_ratio 0.05 and DASP at K = {ORIGINAL_COUNT} in "
+              "two more, PCL VCCS in the last), frames in "
               "parallel (JOBS, default 2) with every method single-threaded, and calls this "
               "script. Per-frame CSV/JSON stay in `build_dir/eval/*/per_frame.*`.\n")
     for folder, m in meta:
         md.append(f"- run `{os.path.basename(folder.rstrip('/'))}`: " +
-                  ", ".join(f"{k} = {v}" for k, v in m.items() if k != "data"))
+                  ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
+                            for k, v in m.items() if k != "data"))
     md.append("")
     with open(os.path.join(args.out, "dasp.md"), "w") as f:
         f.write("\n".join(md))

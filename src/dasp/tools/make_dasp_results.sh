@@ -23,6 +23,12 @@ for wd in 0.25 1; do
   "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_wd${wd}" \
     --methods DASP --dasp-weight-depth "${wd}" --name-suffix "_wd${wd}" -k "${KS[@]}" -j "${JOBS}"
 done
+# DASP with the former depth-jump ratio, and DASP at the count the original delivers for K = 1000
+# (ORIGINAL_COUNT in make_dasp_results.py).
+"${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_jump0.05" \
+  --methods DASP --depth-jump-ratio 0.05 --name-suffix "_jump0.05" -k "${KS[@]}" -j "${JOBS}"
+"${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_k923" \
+  --methods DASP -k 923 -j "${JOBS}"
 # PCL supervoxels are the slowest method: one separate pass per K.
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
   --methods VCCS -k "${KS[@]}" -j "${JOBS}"
@@ -32,4 +38,5 @@ DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetition
 /usr/bin/python3 "${REPO}/src/dasp/tools/make_dasp_results.py" --out "${REPO}/docs/results" \
   --bench "${BUILD}/bench.txt" \
   --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
-  "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1"
+  "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1" "${BUILD}/eval/dasp_jump0.05" \
+  "${BUILD}/eval/dasp_k923"

@@ -74,6 +74,7 @@ MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOption
       config.threads = options.threads;
       config.max_slant_factor = options.max_slant_factor;
       config.weight_depth = options.weight_depth;
+      config.depth_jump_ratio = options.depth_jump_ratio;
       Superpixels s =
           method == Method::kDasp ? computeDasp(frame, config) : computeAspRgbd(frame, config);
       result.labels = std::move(s.labels);

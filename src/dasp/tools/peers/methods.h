@@ -33,6 +33,7 @@ struct MethodOptions {
   float vccs_seed_scale = VccsConfig{}.seed_scale;         ///< See VccsConfig::seed_scale.
   float max_slant_factor = DaspConfig{}.max_slant_factor;  ///< DASP density clamp (dasp.h).
   float weight_depth = DaspConfig{}.weight_depth;          ///< DASP depth weight (dasp.h).
+  float depth_jump_ratio = DaspConfig{}.depth_jump_ratio;  ///< DASP depth jump (dasp.h).
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
