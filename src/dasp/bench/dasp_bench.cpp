@@ -240,9 +240,20 @@ enum Stage {
 constexpr const char* kStageNames[kStages] = {"features", "density", "sampling",     "init",
                                               "assign",   "update",  "connectivity", "fit"};
 
+// Row segments of one label in a label image (labels >= 0): the unit of work of the DALIC update,
+// connectivity enforcement and the superpoint fit besides the pixels themselves.
+int labelRuns(const cv::Mat& labels) {
+  int runs = 0;
+  for (int y = 0; y < labels.rows; ++y) {
+    const int* row = labels.ptr<int>(y);
+    for (int x = 0; x < labels.cols; ++x) runs += row[x] >= 0 && (x == 0 || row[x] != row[x - 1]);
+  }
+  return runs;
+}
+
 // Where the growth with K comes from: the DASP stages one by one (the steps computeDasp takes,
 // buffers kept across frames as in DaspSegmenter), each timed in thread CPU time; the counters
-// are ms per frame.
+// are ms per frame, and "runs" the label runs of DALIC's last labels.
 void BM_DaspStagesCount(benchmark::State& state) {
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(state.range(0));
@@ -252,6 +263,7 @@ void BM_DaspStagesCount(benchmark::State& state) {
   const cv::Mat valid(fx.features.height, fx.features.width, CV_8UC1, fx.features.valid.data());
   const cv::Mat depth(fx.features.height, fx.features.width, CV_32FC1, fx.features.z.data());
   double ms[kStages] = {};
+  int runs = 0;
   for (auto _ : state) {
     double t = bench::threadCpuMs();
     const auto lap = [&t, &ms](Stage stage) {
@@ -279,9 +291,13 @@ void BM_DaspStagesCount(benchmark::State& state) {
     lap(kConnectivity);
     benchmark::DoNotOptimize(fitSuperpoints(labels, fx.features, fx.density, fx.params.radius_m));
     lap(kFit);
+    state.PauseTiming();
+    runs = labelRuns(dalic.labels());
+    state.ResumeTiming();
   }
   const double n = static_cast<double>(state.iterations());
   for (int stage = 0; stage < kStages; ++stage) state.counters[kStageNames[stage]] = ms[stage] / n;
+  state.counters["runs"] = runs;
 }
 BENCHMARK(BM_DaspStagesCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
 
@@ -409,14 +425,14 @@ int main(int argc, char** argv) {
     return it == reporter.counters.end() ? -1.0 : it->second;
   };
   if (stageMs(1000, "assign") > 0) {
-    std::printf("DASP stages against K (single-threaded, CPU ms per frame):\n       ");
+    std::printf("DASP stages against K (single-threaded, CPU ms per frame; label runs):\n       ");
     for (const char* stage : kStageNames) std::printf(" %12s", stage);
-    std::printf("\n");
+    std::printf(" %12s\n", "label runs");
     for (int k : kCounts) {
       if (stageMs(k, "assign") < 0) continue;
       std::printf("  K = %4d", k);
       for (const char* stage : kStageNames) std::printf(" %12.2f", stageMs(k, stage));
-      std::printf("\n");
+      std::printf(" %12.0f\n", stageMs(k, "runs"));
     }
   }
   const double full = find("BM_DaspPixels/quarter_scale:4");
