@@ -339,8 +339,8 @@ def main():
                 f"{k_hi} ({runs[k_lo]:.0f} to {runs[k_hi]:.0f}), and each run costs its "
                 f"accumulator update and the sum of its vector lanes. The assignment compares a "
                 f"pixel with the clusters whose reach disc (1.5 R + 1 px) holds it, vectorised "
-                f"along each disc's chord in a row; smaller discs mean more of the pixels "
-                f"covered twice by the margin and more chords whose ends fill vectors only "
+                f"along each disc's chord in a row; the smaller the discs, the more the 1 px "
+                f"margin adds and the more chords there are whose ends fill vectors only "
                 f"partly. Each of these costs is small per unit, but the per-pixel work is now "
                 f"so small that they show: the thesis' claim of a runtime independent of K "
                 f"(thesis section 3.2.3) holds for code whose per-pixel work dominates.\n")
