@@ -192,7 +192,7 @@ class Dalic {
 /// across them).
 int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
                         double min_weight, const cv::Mat& depth = cv::Mat(),
-                        float depth_jump_ratio = 0.02f);  // DaspConfig's default
+                        float depth_jump_ratio = DaspConfig{}.depth_jump_ratio);
 
 /// Superpoint fit: per label the mean colour, position and pixel position, plane-fit normal and
 /// eigenvalue shape properties (§3.2.3). labels CV_32SC1 with values -1..n-1.
