@@ -69,11 +69,11 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config) {
     throw std::invalid_argument("DASP: radius_m must be finite and positive in radius mode");
   }
   if (config.iterations < 1) throw std::invalid_argument("DASP: iterations must be >= 1");
-  if (!(config.weight_spatial >= 0.0f) || !(config.weight_color >= 0.0f) ||
-      !(config.weight_normal >= 0.0f) || !(config.weight_depth >= 0.0f) ||
-      !std::isfinite(config.weight_spatial) || !std::isfinite(config.weight_color) ||
-      !std::isfinite(config.weight_normal) || !std::isfinite(config.weight_depth)) {
-    throw std::invalid_argument("DASP: metric weights must be finite and >= 0");
+  for (const float weight :
+       {config.weight_spatial, config.weight_color, config.weight_normal, config.weight_depth}) {
+    if (!(weight >= 0.0f) || !std::isfinite(weight)) {
+      throw std::invalid_argument("DASP: metric weights must be finite and >= 0");
+    }
   }
   if (!finitePositive(config.window_multiple)) {
     throw std::invalid_argument("DASP: window_multiple must be finite and positive");

@@ -216,7 +216,9 @@ TEST(Dasp, DepthWeightStretchesSuperpixelsAlongEqualDepth) {
     std::vector<double> n(s.superpixels.size(), 0.0), sx(n), sy(n), sxx(n), syy(n);
     for (int y = 0; y < s.labels.rows; ++y) {
       for (int x = 0; x < s.labels.cols; ++x) {
-        const auto l = static_cast<std::size_t>(s.labels.at<int>(y, x));
+        const int label = s.labels.at<int>(y, x);
+        if (label < 0) continue;
+        const auto l = static_cast<std::size_t>(label);
         n[l] += 1.0;
         sx[l] += x;
         sy[l] += y;

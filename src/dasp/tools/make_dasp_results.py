@@ -32,10 +32,6 @@ STYLE = {
     "DASP_wd1": dict(color="tab:red", marker="o", linestyle=":", alpha=0.6),
     "DASP_jump0.05": dict(color="tab:brown", marker="o", linestyle="--", alpha=0.6),
 }
-# Superpixels the thesis author's original DASP delivers in the mask when asked for K = 1000
-# (issue 3 anchor table): DASP is also run at this K, to compare at the same count. The row
-# is reported beside the anchor, not in the tables and plots over K.
-ORIGINAL_COUNT = 923
 # (column, title, better) for the plots.
 PLOTS = [
     ("boundary_recall", "Boundary recall (2 px)", "higher"),
@@ -80,14 +76,9 @@ def fmt(v, digits):
     return "" if v == "" else f"{v:.{digits}f}"
 
 
-def counts_of(rows):
-    return sorted({k for _, k in rows} - {ORIGINAL_COUNT})
-
-
-def plot(rows, out_dir):
+def plot(rows, ks, out_dir):
     files = []
     methods = methods_of(rows)
-    ks = counts_of(rows)
     fig, axes = plt.subplots(3, 4, figsize=(18, 12))
     for ax, (col, title, better) in zip(axes.flat, PLOTS):
         for m in methods:
@@ -152,15 +143,18 @@ def main():
                         help="which code produced the numbers (default: the git HEAD commit)")
     parser.add_argument("--bench", default=None,
                         help="console output of dasp_dasp_bench to include as the speed section")
+    parser.add_argument("--original-count", type=int, default=0,
+                        help="K of the DASP run at the count the original DASP delivers for "
+                             "K = 1000: reported beside the anchor, not in the tables over K")
     parser.add_argument("folders", nargs="+")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
     rows, meta = read_means(args.folders)
     if not rows:
         raise SystemExit("no rows in " + " ".join(args.folders))
-    plots = plot(rows, args.out)
+    ks = sorted({k for _, k in rows} - {args.original_count})
+    plots = plot(rows, ks, args.out)
     methods = methods_of(rows)
-    ks = counts_of(rows)
     frames = sorted({int(m.get("frames", 0)) for _, m in meta})
 
     main_meta = next((m for f, m in meta if os.path.basename(f.rstrip("/")) == "main"), {})
@@ -202,11 +196,11 @@ def main():
               "UE 0.0037, ASA 0.9982, CE depth 6.9 mm, CO 0.95, about 60 ms; PCL VCCS: 1013, "
               "0.966, 0.0050, 0.9976, 6.7 mm, 0.64, 100-130 ms; OpenCV SLIC K = 2000: 1386, 0.966, "
               "0.016, 0.992, 15.3 mm, 0.96, 100-140 ms.\n")
-    r = rows.get(("DASP", ORIGINAL_COUNT))
+    r = rows.get(("DASP", args.original_count))
     if r:
-        md.append(f"At the original's count (DASP asked for K = {ORIGINAL_COUNT}, the number the "
-                  f"original delivers for K = 1000): {r['superpixels_in_mask']:.0f} in mask, Rec "
-                  f"{r['boundary_recall']:.3f}, UE {r['ue_np']:.4f}, ASA {r['asa']:.4f}, CE depth "
+        md.append(f"At the original's count (DASP asked for K = {args.original_count}, the "
+                  f"number the original delivers for K = 1000): "
+                  f"{r['superpixels_in_mask']:.0f} in mask, Rec {r['boundary_recall']:.3f}, UE {r['ue_np']:.4f}, ASA {r['asa']:.4f}, CE depth "
                   f"{r['ce_depth_mm']:.2f} mm, CO {r['co_ipq']:.3f}.\n")
     variants = [m for m in methods if m.startswith("DASP_wd")]
     if variants:
@@ -349,8 +343,8 @@ def main():
               "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, DASP with weight_depth 0.25 and 1 "
-              f"in two more, DASP with depth_jump_ratio 0.05 and DASP at K = {ORIGINAL_COUNT} in "
-              "two more, PCL VCCS in the last), frames in "
+              "in two more, DASP with depth_jump_ratio 0.05 and DASP at K = "
+              f"{args.original_count} in two more, PCL VCCS in the last), frames in "
               "parallel (JOBS, default 2) with every method single-threaded, and calls this "
               "script. Per-frame CSV/JSON stay in `build_dir/eval/*/per_frame.*`.\n")
     for folder, m in meta:

@@ -89,11 +89,12 @@ struct DaspConfig {
   /// does not connect them. Why 0.02: at PrimeSense resolution (f about 525 px) and the normal
   /// step of 2 px, a continuous surface changes depth this much only where it is steeper than
   /// about 79 deg to the image plane, the slant at which max_slant_factor = 5 clamps the
-  /// density; and it is above the sensor's depth quantisation (about 0.3 % of D per metre of D)
-  /// up to 6 m. For much smaller f (low-resolution images) raise it in proportion to 525 / f.
-  /// On the learn split it gives 4-11 % lower undersegmentation error than 0.05 (K = 250 to
-  /// 2000; 10 % at K = 1000 over three seeds) at equal recall, compression error and
-  /// compactness (docs/results/dasp.md).
+  /// density; and it is above the sensor's depth quantisation up to 6 m (about 0.3 % of D per
+  /// metre of D, computed from a 7.5 cm baseline, f = 580 px and 1/8 px disparity steps). For
+  /// much smaller f (low-resolution images) raise it in proportion to 525 / f. On the learn
+  /// split it gives 4-11 % lower undersegmentation error than 0.05 (K = 250 to 2000; 10 % at
+  /// K = 1000 over three seeds) at equal recall, compression error and compactness
+  /// (docs/results/dasp.md).
   float depth_jump_ratio = 0.02f;
   std::uint64_t seed = 0;  ///< Seed of the random generator (sampling). Same seed, same output.
   int threads = 1;         ///< Worker threads: 1 = single-threaded, 0 = all cores (TBB).
