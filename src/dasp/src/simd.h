@@ -75,6 +75,7 @@ DASP_ALWAYS_INLINE bool coverSpanAligned(int begin, int end, int width, int& sta
 DASP_ALWAYS_INLINE int labelRunEnd(const int* labels, int begin, int width) {
   const int k = labels[begin];
   int end = begin + 1;
+#if defined(__GNUC__)  // GCC and Clang: __builtin_ctz
   while (end + kLanes <= width) {
     unsigned differ = 0;  // bit j: labels[end + j] != k (compiled to one vector compare)
     for (int j = 0; j < kLanes; ++j) {
@@ -83,6 +84,7 @@ DASP_ALWAYS_INLINE int labelRunEnd(const int* labels, int begin, int width) {
     if (differ != 0) return end + __builtin_ctz(differ);
     end += kLanes;
   }
+#endif
   while (end < width && labels[end] == k) ++end;
   return end;
 }
