@@ -86,6 +86,8 @@ macro(core_library_end name prefix)
       target_link_libraries(${name}_tests PRIVATE ${name}::${name} GTest::gtest GTest::gtest_main
                             ${${prefix}_TEST_LIBS})
       target_compile_options(${name}_tests PRIVATE ${${prefix}_WARNINGS})
+      # Tests may check the library's internal headers under src/ (e.g. dasp's simd.h).
+      target_include_directories(${name}_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
       get_filename_component(${prefix}_REPO_ROOT ${CMAKE_CURRENT_SOURCE_DIR}/../.. ABSOLUTE)
       target_compile_definitions(${name}_tests PRIVATE
         ${prefix}_SHARED_DATA_DIR="${${prefix}_REPO_ROOT}/../shared/data"

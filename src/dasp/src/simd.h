@@ -3,9 +3,6 @@
 // floats at a time.
 #pragma once
 
-#include <cstdint>
-#include <cstring>
-
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define DASP_ALWAYS_INLINE inline __attribute__((always_inline))
 // The function is built for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA) and the baseline, and the
