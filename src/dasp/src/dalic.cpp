@@ -102,13 +102,14 @@ DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load,
 // (the order in which alg. 3's cluster-by-cluster loop visits a pixel, so ties go the same
 // way): the row's features stay in the L1 cache for the three or so clusters that reach each
 // pixel, where a cluster-by-cluster loop would fetch them from L2 each time.
+// clusters: the indices into terms of the clusters whose window meets the rows, ascending.
 template <MetricKind kKind>
 DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* terms,
-                                   std::size_t count, int row_begin, int row_end,
-                                   float* __restrict dist, int* __restrict label,
+                                   const int* clusters, std::size_t count, int row_begin,
+                                   int row_end, float* __restrict dist, int* __restrict label,
                                    std::vector<int>& scratch) {
   const int width = f.width;
-  // The reach-disc spans of all clusters, bucketed by row (counting sort, in cluster order
+  // The reach-disc spans of the clusters, bucketed by row (counting sort, in cluster order
   // within a row): the row loop below then visits only the clusters that reach the row.
   // scratch (kept across calls: no allocation or clearing per frame) holds the row starts, the
   // fill positions and the spans (cluster, x0, x1).
@@ -118,9 +119,9 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
   // Clusters per row from a difference array, then the bucket starts.
   int* row_start = scratch.data();
   std::fill(row_start, row_start + rows + 2, 0);
-  for (std::size_t k = 0; k < count; ++k) {
-    const int y0 = std::max(terms[k].y0, row_begin), y1 = std::min(terms[k].y1, row_end - 1);
-    if (y0 > y1) continue;
+  for (std::size_t i = 0; i < count; ++i) {
+    const ClusterTerms& t = terms[clusters[i]];
+    const int y0 = std::max(t.y0, row_begin), y1 = std::min(t.y1, row_end - 1);
     ++row_start[y0 - row_begin + 1];
     --row_start[y1 - row_begin + 2];
   }
@@ -132,28 +133,32 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
   int* fill = row_start + rows + 2;
   int* spans = fill + rows;
   std::copy(row_start, row_start + rows, fill);
-  for (std::size_t k = 0; k < count; ++k) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const int k = clusters[i];
     const ClusterTerms& t = terms[k];
     const int y0 = std::max(t.y0, row_begin), y1 = std::min(t.y1, row_end - 1);
+    const float u = t.u, v = t.v, reach2 = t.reach * t.reach;
+    const float x0 = static_cast<float>(t.x0), x1 = static_cast<float>(t.x1);
     // Columns [x0, x1] of the cluster's reach disc in each row: only the chord of the disc;
     // pixels in the corners of the bounding square are farther than C R from the centre (alg. 3
     // tests the cluster's reach; the square is the thesis' simplification, 27 % more distance
-    // evaluations). Up to kSpanBlock rows at a time, in a loop the compiler vectorises.
+    // evaluations). Up to kSpanBlock rows at a time, in a loop the compiler vectorises (the
+    // bounds are clamped to the window there, as floats: the store loop only copies).
     for (int block = y0; block <= y1; block += kSpanBlock) {
       const int n = std::min(kSpanBlock, y1 - block + 1);
-      float left[kSpanBlock], right[kSpanBlock];
-      const float reach2 = t.reach * t.reach;
-      for (int i = 0; i < n; ++i) {
-        const float dv = static_cast<float>(block + i) - t.v;
+      int left[kSpanBlock], right[kSpanBlock];
+      for (int j = 0; j < n; ++j) {
+        const float dv = static_cast<float>(block + j) - v;
         const float chord = std::sqrt(std::max(0.0f, reach2 - dv * dv));
-        left[i] = std::ceil(t.u - chord);
-        right[i] = std::floor(t.u + chord);
+        left[j] = static_cast<int>(std::max(x0, std::ceil(u - chord)));
+        right[j] = static_cast<int>(std::min(x1, std::floor(u + chord)));
       }
-      for (int i = 0; i < n; ++i) {
-        int* span = spans + 3 * fill[block + i - row_begin]++;
-        span[0] = static_cast<int>(k);
-        span[1] = std::max(t.x0, static_cast<int>(left[i]));
-        span[2] = std::min(t.x1, static_cast<int>(right[i]));
+      int* row_fill = fill + (block - row_begin);
+      for (int j = 0; j < n; ++j) {
+        int* span = spans + 3 * row_fill[j]++;
+        span[0] = k;
+        span[1] = left[j];
+        span[2] = right[j];
       }
     }
   }
@@ -205,22 +210,27 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
 }
 
 DASP_VECTOR_CLONES void assignRowsDepthAdaptive(const PixelFeatures& f, const ClusterTerms* terms,
-                                                std::size_t count, int row_begin, int row_end,
-                                                float* dist, int* label,
+                                                const int* clusters, std::size_t count,
+                                                int row_begin, int row_end, float* dist, int* label,
                                                 std::vector<int>& scratch) {
-  assignRows<MetricKind::kDepthAdaptive>(f, terms, count, row_begin, row_end, dist, label, scratch);
+  assignRows<MetricKind::kDepthAdaptive>(f, terms, clusters, count, row_begin, row_end, dist, label,
+                                         scratch);
 }
 
 DASP_VECTOR_CLONES void assignRowsColor2D(const PixelFeatures& f, const ClusterTerms* terms,
-                                          std::size_t count, int row_begin, int row_end,
-                                          float* dist, int* label, std::vector<int>& scratch) {
-  assignRows<MetricKind::kColor2D>(f, terms, count, row_begin, row_end, dist, label, scratch);
+                                          const int* clusters, std::size_t count, int row_begin,
+                                          int row_end, float* dist, int* label,
+                                          std::vector<int>& scratch) {
+  assignRows<MetricKind::kColor2D>(f, terms, clusters, count, row_begin, row_end, dist, label,
+                                   scratch);
 }
 
 DASP_VECTOR_CLONES void assignRowsColorDepth2D(const PixelFeatures& f, const ClusterTerms* terms,
-                                               std::size_t count, int row_begin, int row_end,
-                                               float* dist, int* label, std::vector<int>& scratch) {
-  assignRows<MetricKind::kColorDepth2D>(f, terms, count, row_begin, row_end, dist, label, scratch);
+                                               const int* clusters, std::size_t count,
+                                               int row_begin, int row_end, float* dist, int* label,
+                                               std::vector<int>& scratch) {
+  assignRows<MetricKind::kColorDepth2D>(f, terms, clusters, count, row_begin, row_end, dist, label,
+                                        scratch);
 }
 
 // The update sums of rows [row_begin, row_end) into acc (kClusterAccSize floats per cluster).
@@ -422,6 +432,10 @@ struct Dalic::Impl {
 struct Dalic::Scratch {
   std::vector<ClusterTerms> terms;      // assign(): the distance constants of every cluster
   std::vector<std::vector<int>> spans;  // assign(): span buckets, one per row stripe
+  std::vector<int> row_stripe;          // assign(): the row stripe of each row
+  std::vector<int> stripe_start;        // assign(): start of each stripe's cluster list
+  std::vector<int> stripe_fill;         // assign(): fill positions of the stripe lists
+  std::vector<int> stripe_clusters;     // assign(): the clusters of each stripe, ascending
   std::vector<float> accumulators;      // update(): kClusterAccSize per stripe and cluster
   // update()'s output, swapped with clusters_; initialize(): one cluster per seed, in seed order
   std::vector<Cluster> next_clusters;
@@ -519,21 +533,51 @@ void Dalic::assign() {
     terms.push_back(Impl::terms(*this, clusters_[k], static_cast<int>(k)));
   }
   const ClusterTerms* t = terms.data();
-  const std::size_t count = terms.size();
+  // The clusters whose window meets each row stripe, ascending (a counting sort by stripe): a
+  // stripe then visits its own clusters, about K / stripes of them, instead of all K.
+  const int chunks = detail::chunkCount(f.height, kChunks);
+  std::vector<int>& row_stripe = scratch_->row_stripe;
+  row_stripe.resize(static_cast<std::size_t>(f.height));
+  for (int chunk = 0; chunk < chunks; ++chunk) {
+    std::fill(row_stripe.begin() + detail::chunkBegin(f.height, kChunks, chunk),
+              row_stripe.begin() + detail::chunkBegin(f.height, kChunks, chunk + 1), chunk);
+  }
+  std::vector<int>& stripe_start = scratch_->stripe_start;
+  stripe_start.assign(static_cast<std::size_t>(chunks) + 1, 0);
+  for (const ClusterTerms& c : terms) {
+    if (c.y0 > c.y1) continue;  // a window outside the image (a centre far off it)
+    for (int chunk = row_stripe[c.y0]; chunk <= row_stripe[c.y1]; ++chunk) {
+      ++stripe_start[chunk + 1];
+    }
+  }
+  for (int chunk = 0; chunk < chunks; ++chunk) stripe_start[chunk + 1] += stripe_start[chunk];
+  std::vector<int>& stripe_clusters = scratch_->stripe_clusters;
+  stripe_clusters.resize(static_cast<std::size_t>(stripe_start[chunks]));
+  std::vector<int>& stripe_fill = scratch_->stripe_fill;
+  stripe_fill.assign(stripe_start.begin(), stripe_start.end() - 1);
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    if (terms[k].y0 > terms[k].y1) continue;
+    for (int chunk = row_stripe[terms[k].y0]; chunk <= row_stripe[terms[k].y1]; ++chunk) {
+      stripe_clusters[static_cast<std::size_t>(stripe_fill[chunk]++)] = static_cast<int>(k);
+    }
+  }
   float* dist = distance_.data();
   int* label = labels_.data();
-  scratch_->spans.resize(kChunks);
+  scratch_->spans.resize(static_cast<std::size_t>(chunks));
   detail::forChunks(f.height, kChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
     std::vector<int>& scratch = scratch_->spans[static_cast<std::size_t>(chunk)];
+    const int* ids = stripe_clusters.data() + stripe_start[chunk];
+    const std::size_t count =
+        static_cast<std::size_t>(stripe_start[chunk + 1] - stripe_start[chunk]);
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
-        assignRowsDepthAdaptive(f, t, count, row_begin, row_end, dist, label, scratch);
+        assignRowsDepthAdaptive(f, t, ids, count, row_begin, row_end, dist, label, scratch);
         break;
       case MetricKind::kColor2D:
-        assignRowsColor2D(f, t, count, row_begin, row_end, dist, label, scratch);
+        assignRowsColor2D(f, t, ids, count, row_begin, row_end, dist, label, scratch);
         break;
       case MetricKind::kColorDepth2D:
-        assignRowsColorDepth2D(f, t, count, row_begin, row_end, dist, label, scratch);
+        assignRowsColorDepth2D(f, t, ids, count, row_begin, row_end, dist, label, scratch);
         break;
     }
   });

@@ -12,18 +12,24 @@
 
 namespace dasp::detail {
 
+// The number of chunks forChunks(n, chunk_count, ...) runs.
+inline int chunkCount(int n, int chunk_count) { return std::max(1, std::min(chunk_count, n)); }
+
+// First index of chunk c (c = chunkCount(...) gives n).
+inline int chunkBegin(int n, int chunk_count, int c) {
+  return static_cast<int>(static_cast<long long>(n) * c / chunkCount(n, chunk_count));
+}
+
 template <typename Body>
 void forChunks(int n, int chunk_count, int threads, const Body& body) {
-  chunk_count = std::max(1, std::min(chunk_count, n));
-  const auto chunk_begin = [n, chunk_count](int c) {
-    return static_cast<int>(static_cast<long long>(n) * c / chunk_count);
-  };
-  if (threads == 1 || chunk_count == 1) {
-    for (int c = 0; c < chunk_count; ++c) body(c, chunk_begin(c), chunk_begin(c + 1));
+  const int chunks = chunkCount(n, chunk_count);
+  const auto chunk_begin = [n, chunks](int c) { return chunkBegin(n, chunks, c); };
+  if (threads == 1 || chunks == 1) {
+    for (int c = 0; c < chunks; ++c) body(c, chunk_begin(c), chunk_begin(c + 1));
     return;
   }
   const auto run = [&]() {
-    tbb::parallel_for(tbb::blocked_range<int>(0, chunk_count, 1),
+    tbb::parallel_for(tbb::blocked_range<int>(0, chunks, 1),
                       [&](const tbb::blocked_range<int>& range) {
                         for (int c = range.begin(); c < range.end(); ++c) {
                           body(c, chunk_begin(c), chunk_begin(c + 1));
