@@ -57,7 +57,7 @@ constexpr int kClusterAccSize = kRunAccSize + detail::kRunSums;  // floats per c
 // only between clusters that are equally near. The 2D position of kColor2D / kColorDepth2D stays
 // a difference (it is not a pixel feature).
 struct ClusterTerms {
-  int x0, x1, y0, y1;  // window, inclusive pixel bounds
+  int x0, x1, y0, y1;  // window, inclusive pixel bounds (never empty: it holds the centre)
   int id;              // cluster index, the label of the pixels it takes
   float u, v;
   float reach;          // radius of the disc the cluster can reach, pixels (C R + 1)
@@ -432,11 +432,9 @@ struct Dalic::Impl {
 struct Dalic::Scratch {
   std::vector<ClusterTerms> terms;      // assign(): the distance constants of every cluster
   std::vector<std::vector<int>> spans;  // assign(): span buckets, one per row stripe
-  std::vector<int> row_stripe;          // assign(): the row stripe of each row
-  std::vector<int> stripe_start;        // assign(): start of each stripe's cluster list
-  std::vector<int> stripe_fill;         // assign(): fill positions of the stripe lists
-  std::vector<int> stripe_clusters;     // assign(): the clusters of each stripe, ascending
-  std::vector<float> accumulators;      // update(): kClusterAccSize per stripe and cluster
+  std::vector<int> row_stripe;          // the row stripe of each image row (set by reset())
+  std::vector<std::vector<int>> stripe_clusters;  // assign(): each stripe's clusters, ascending
+  std::vector<float> accumulators;  // update(): kClusterAccSize per stripe and cluster
   // update()'s output, swapped with clusters_; initialize(): one cluster per seed, in seed order
   std::vector<Cluster> next_clusters;
   std::vector<std::pair<float, int>> by_mass;  // count control: (mass, index) per cluster
@@ -485,6 +483,17 @@ void Dalic::reset(const DalicParams& params) {
     labels_.assign(features.size(), -1);
     distance_.resize(features.size());  // assign() fills it row by row
   }
+  // assign()'s row stripes: the chunks forChunks runs over the rows.
+  const int stripes = detail::chunkCount(features.height, kChunks);
+  scratch_->row_stripe.resize(static_cast<std::size_t>(features.height));
+  for (int stripe = 0; stripe < stripes; ++stripe) {
+    std::fill(
+        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, kChunks, stripe),
+        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, kChunks, stripe + 1),
+        stripe);
+  }
+  scratch_->spans.resize(static_cast<std::size_t>(stripes));
+  scratch_->stripe_clusters.resize(static_cast<std::size_t>(stripes));
 }
 
 Dalic::~Dalic() = default;
@@ -533,42 +542,22 @@ void Dalic::assign() {
     terms.push_back(Impl::terms(*this, clusters_[k], static_cast<int>(k)));
   }
   const ClusterTerms* t = terms.data();
-  // The clusters whose window meets each row stripe, ascending (a counting sort by stripe): a
-  // stripe then visits its own clusters, about K / stripes of them, instead of all K.
-  const int chunks = detail::chunkCount(f.height, kChunks);
-  std::vector<int>& row_stripe = scratch_->row_stripe;
-  row_stripe.resize(static_cast<std::size_t>(f.height));
-  for (int chunk = 0; chunk < chunks; ++chunk) {
-    std::fill(row_stripe.begin() + detail::chunkBegin(f.height, kChunks, chunk),
-              row_stripe.begin() + detail::chunkBegin(f.height, kChunks, chunk + 1), chunk);
-  }
-  std::vector<int>& stripe_start = scratch_->stripe_start;
-  stripe_start.assign(static_cast<std::size_t>(chunks) + 1, 0);
-  for (const ClusterTerms& c : terms) {
-    if (c.y0 > c.y1) continue;  // a window outside the image (a centre far off it)
-    for (int chunk = row_stripe[c.y0]; chunk <= row_stripe[c.y1]; ++chunk) {
-      ++stripe_start[chunk + 1];
-    }
-  }
-  for (int chunk = 0; chunk < chunks; ++chunk) stripe_start[chunk + 1] += stripe_start[chunk];
-  std::vector<int>& stripe_clusters = scratch_->stripe_clusters;
-  stripe_clusters.resize(static_cast<std::size_t>(stripe_start[chunks]));
-  std::vector<int>& stripe_fill = scratch_->stripe_fill;
-  stripe_fill.assign(stripe_start.begin(), stripe_start.end() - 1);
+  // The clusters whose window meets each row stripe, in ascending order: a stripe then visits
+  // only those, not all K.
+  const std::vector<int>& row_stripe = scratch_->row_stripe;
+  std::vector<std::vector<int>>& stripe_clusters = scratch_->stripe_clusters;
+  for (std::vector<int>& ids : stripe_clusters) ids.clear();  // keeps the capacity
   for (std::size_t k = 0; k < terms.size(); ++k) {
-    if (terms[k].y0 > terms[k].y1) continue;
     for (int chunk = row_stripe[terms[k].y0]; chunk <= row_stripe[terms[k].y1]; ++chunk) {
-      stripe_clusters[static_cast<std::size_t>(stripe_fill[chunk]++)] = static_cast<int>(k);
+      stripe_clusters[static_cast<std::size_t>(chunk)].push_back(static_cast<int>(k));
     }
   }
   float* dist = distance_.data();
   int* label = labels_.data();
-  scratch_->spans.resize(static_cast<std::size_t>(chunks));
   detail::forChunks(f.height, kChunks, params_.threads, [&](int chunk, int row_begin, int row_end) {
     std::vector<int>& scratch = scratch_->spans[static_cast<std::size_t>(chunk)];
-    const int* ids = stripe_clusters.data() + stripe_start[chunk];
-    const std::size_t count =
-        static_cast<std::size_t>(stripe_start[chunk + 1] - stripe_start[chunk]);
+    const int* ids = stripe_clusters[static_cast<std::size_t>(chunk)].data();
+    const std::size_t count = stripe_clusters[static_cast<std::size_t>(chunk)].size();
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
         assignRowsDepthAdaptive(f, t, ids, count, row_begin, row_end, dist, label, scratch);
