@@ -488,8 +488,8 @@ void Dalic::reset(const DalicParams& params) {
   scratch_->row_stripe.resize(static_cast<std::size_t>(features.height));
   for (int stripe = 0; stripe < stripes; ++stripe) {
     std::fill(
-        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, kChunks, stripe),
-        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, kChunks, stripe + 1),
+        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, stripes, stripe),
+        scratch_->row_stripe.begin() + detail::chunkBegin(features.height, stripes, stripe + 1),
         stripe);
   }
   scratch_->spans.resize(static_cast<std::size_t>(stripes));

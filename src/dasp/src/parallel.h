@@ -15,9 +15,9 @@ namespace dasp::detail {
 // The number of chunks forChunks(n, chunk_count, ...) runs.
 inline int chunkCount(int n, int chunk_count) { return std::max(1, std::min(chunk_count, n)); }
 
-// First index of chunk c (c = chunkCount(...) gives n).
-inline int chunkBegin(int n, int chunk_count, int c) {
-  return static_cast<int>(static_cast<long long>(n) * c / chunkCount(n, chunk_count));
+// First index of chunk c of the `chunks` = chunkCount(n, ...) chunks (c = chunks gives n).
+inline int chunkBegin(int n, int chunks, int c) {
+  return static_cast<int>(static_cast<long long>(n) * c / chunks);
 }
 
 template <typename Body>
