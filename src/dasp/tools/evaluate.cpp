@@ -260,6 +260,7 @@ int main(int argc, char** argv) {
                               {"seed", options.seed},
                               {"dasp_weight_depth", options.weight_depth},
                               {"depth_jump_ratio", options.depth_jump_ratio},
+                              {"max_slant_factor", options.max_slant_factor},
                               {"parallel_frames", threads},
                               {"mask", "object label > 0 and depth > 0"},
                               {"time_ms", "thread CPU time of the method call (single-threaded)"},

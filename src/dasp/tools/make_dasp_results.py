@@ -32,6 +32,8 @@ STYLE = {
     "DASP_wd1": dict(color="tab:red", marker="o", linestyle=":", alpha=0.6),
     "DASP_jump0.05": dict(color="tab:brown", marker="o", linestyle="--", alpha=0.6),
 }
+# Variants that appear only in their own tables, not in the plots (they would crowd them).
+TABLE_ONLY = ("DASP_slant", "DASP_it")
 # (column, title, better) for the plots.
 PLOTS = [
     ("boundary_recall", "Boundary recall (2 px)", "higher"),
@@ -47,6 +49,10 @@ PLOTS = [
     ("count_ratio", "Delivered / requested superpixels", "1 is exact"),
     ("time_ms", "Time per frame [ms], one core", "lower"),
 ]
+
+# The columns of the tables of one DASP parameter.
+QUALITY_COLUMNS = [("boundary_recall", "Rec", 4), ("ue_np", "UE NP", 5), ("asa", "ASA", 5),
+                   ("ce_depth_mm", "CE depth mm", 2), ("co_ipq", "CO", 3)]
 
 
 def read_means(folders):
@@ -76,9 +82,23 @@ def fmt(v, digits):
     return "" if v == "" else f"{v:.{digits}f}"
 
 
+def variant_table(rows, ks, methods, columns):
+    """Markdown table with one line per K and method (in the order given) that has a row;
+    columns: (column, header, digits)."""
+    lines = ["| K | method | " + " | ".join(h for _, h, _ in columns) + " |",
+             "|---|---|" + "---|" * len(columns)]
+    for k in ks:
+        for m in methods:
+            r = rows.get((m, k))
+            if r:
+                lines.append(f"| {k} | {m} | " +
+                             " | ".join(fmt(r.get(c, ""), d) for c, _, d in columns) + " |")
+    return lines + [""]
+
+
 def plot(rows, ks, out_dir):
     files = []
-    methods = methods_of(rows)
+    methods = [m for m in methods_of(rows) if not m.startswith(TABLE_ONLY)]
     fig, axes = plt.subplots(3, 4, figsize=(18, 12))
     for ax, (col, title, better) in zip(axes.flat, PLOTS):
         for m in methods:
@@ -217,17 +237,11 @@ def main():
                   "PCL VCCS" + vccs_text + ". They show the trade-off the thesis names (app. A: "
                   "compression error 'stands in direct competition to superpixel compactness'): "
                   "depth CE against CO, Rec and UE.\n")
-        md.append("| K | method | in mask | CE depth mm | CE 3D mm | CO | Rec | UE NP |")
-        md.append("|---|---|---|---|---|---|---|---|")
-        for k in ks:
-            for m in ["VCCS", "DASP"] + variants:
-                r = rows.get((m, k))
-                if r:
-                    md.append(f"| {k} | {m} | {r['superpixels_in_mask']:.0f} | "
-                              f"{r['ce_depth_mm']:.2f} | {r['ce_position_mm']:.2f} | "
-                              f"{r['co_ipq']:.3f} | {r['boundary_recall']:.3f} | "
-                              f"{r['ue_np']:.4f} |")
-        md.append("")
+        md += variant_table(rows, ks, ["VCCS", "DASP"] + variants,
+                            [("superpixels_in_mask", "in mask", 0),
+                             ("ce_depth_mm", "CE depth mm", 2), ("ce_position_mm", "CE 3D mm", 2),
+                             ("co_ipq", "CO", 3), ("boundary_recall", "Rec", 3),
+                             ("ue_np", "UE NP", 4)])
     jumps = [m for m in methods if m.startswith("DASP_jump")]
     if jumps:
         md.append("## Depth-jump ratio (DaspConfig::depth_jump_ratio)\n")
@@ -236,15 +250,34 @@ def main():
                   "decides where the normals switch to one-sided differences and which "
                   "4-neighbours connectivity enforcement connects (dasp.h gives the reasons for "
                   "the default).\n")
-        md.append("| K | method | Rec | UE NP | ASA | CE depth mm | CO |")
-        md.append("|---|---|---|---|---|---|---|")
-        for k in ks:
-            for m in ["DASP"] + jumps:
-                r = rows.get((m, k))
-                if r:
-                    md.append(f"| {k} | {m} | {r['boundary_recall']:.4f} | {r['ue_np']:.5f} | "
-                              f"{r['asa']:.5f} | {r['ce_depth_mm']:.2f} | {r['co_ipq']:.3f} |")
-        md.append("")
+        md += variant_table(rows, ks, ["DASP"] + jumps, QUALITY_COLUMNS)
+    slants = sorted((m for m in methods if m.startswith("DASP_slant")),
+                    key=lambda m: float(m[len("DASP_slant"):]))
+    if slants:
+        slant = float(main_meta.get("max_slant_factor", 5.0))
+        md.append("## Density clamp (DaspConfig::max_slant_factor)\n")
+        md.append(f"DASP (max_slant_factor = {slant:.3g}, the default) beside DASP_slant<c>, DASP "
+                  "with max_slant_factor = c and everything else at its default, and PCL VCCS. "
+                  "The clamp caps the slant factor 1/|n_z| of the density (eq. 3.15): surfaces "
+                  "steeper than acos(1/c) get the superpixels of a surface that steep. With a "
+                  "lower clamp, steep surfaces (few pixels, many superpixels) get fewer and the "
+                  "many pixels of moderately slanted surfaces more, which the pixel-weighted depth "
+                  "CE rewards; the superpixels are then no longer uniform on the steepest "
+                  "surfaces, which the thesis' density is meant to ensure, and R, computed from "
+                  "the clamped areas, changes with c.\n")
+        md += variant_table(rows, ks, ["VCCS", "DASP"] + slants,
+                            [("superpixels_in_mask", "in mask", 0)] + QUALITY_COLUMNS)
+    iteration_variants = sorted((m for m in methods if m.startswith("DASP_it")),
+                                key=lambda m: int(m[len("DASP_it"):]))
+    if iteration_variants:
+        md.append("## DALIC iterations\n")
+        md.append(f"DASP ({int(main_meta.get('iterations', 5))} iterations, as in the issue's "
+                  "anchor and speed bar) beside DASP_it<n>, DASP with n iterations and "
+                  "everything else at its default. The time is the CPU time per frame of the "
+                  "evaluation run (two frames in parallel on the shared machine): it grows by "
+                  "the assignment and update of every further iteration.\n")
+        md += variant_table(rows, ks, ["DASP"] + iteration_variants,
+                            QUALITY_COLUMNS + [("time_ms", "ms", 0)])
     md.append("## All metrics per method and K\n")
     cols = [("superpixels", "delivered", 0), ("superpixels_in_mask", "in mask", 0),
             ("boundary_recall", "Rec", 3), ("boundary_f1", "boundary F1", 3),
@@ -257,7 +290,7 @@ def main():
             ("time_ms", "ms", 0)]
     md.append("| method | K | " + " | ".join(c[1] for c in cols) + " |")
     md.append("|---|---|" + "---|" * len(cols))
-    for m in methods:
+    for m in (m for m in methods if not m.startswith(TABLE_ONLY)):
         for k in ks:
             r = rows.get((m, k))
             if not r:
@@ -346,8 +379,9 @@ def main():
               "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, DASP with weight_depth 0.25 and 1 "
-              "in two more, DASP with depth_jump_ratio 0.05 and DASP at K = "
-              f"{args.original_count} in two more, PCL VCCS in the last), frames in "
+              "in two more, DASP with depth_jump_ratio 0.05, with max_slant_factor 2 and 3, "
+              "with 10 and 20 iterations, and DASP at K = "
+              f"{args.original_count} in more runs, PCL VCCS in the last), frames in "
               "parallel (JOBS, default 2) with every method single-threaded, and calls this "
               "script. Per-frame CSV/JSON stay in `build_dir/eval/*/per_frame.*`.\n")
     for folder, m in meta:

@@ -31,6 +31,17 @@ done
   --methods DASP --depth-jump-ratio 0.05 --name-suffix "_jump0.05" -k "${KS[@]}" -j "${JOBS}"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}" \
   --methods DASP -k "${ORIGINAL_COUNT}" -j "${JOBS}"
+# DASP with other density clamps (DaspConfig::max_slant_factor) and more DALIC iterations.
+for clamp in 2 3; do
+  "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_slant${clamp}" \
+    --methods DASP --max-slant-factor "${clamp}" --name-suffix "_slant${clamp}" -k "${KS[@]}" \
+    -j "${JOBS}"
+done
+for iterations in 10 20; do
+  "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_it${iterations}" \
+    --methods DASP --iterations "${iterations}" --name-suffix "_it${iterations}" -k "${KS[@]}" \
+    -j "${JOBS}"
+done
 # PCL supervoxels are the slowest method: one separate pass per K.
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
   --methods VCCS -k "${KS[@]}" -j "${JOBS}"
@@ -41,4 +52,5 @@ DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetition
   --bench "${BUILD}/bench.txt" --original-count "${ORIGINAL_COUNT}" \
   --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
   "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1" "${BUILD}/eval/dasp_jump0.05" \
-  "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}"
+  "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}" "${BUILD}/eval/dasp_slant2" "${BUILD}/eval/dasp_slant3" \
+  "${BUILD}/eval/dasp_it10" "${BUILD}/eval/dasp_it20"
