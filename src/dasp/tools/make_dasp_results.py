@@ -32,7 +32,8 @@ STYLE = {
     "DASP_wd1": dict(color="tab:red", marker="o", linestyle=":", alpha=0.6),
     "DASP_jump0.05": dict(color="tab:brown", marker="o", linestyle="--", alpha=0.6),
 }
-# Variants that appear only in their own tables, not in the plots (they would crowd them).
+# Variants that appear only in their own tables, not in the plots and the tables of all methods
+# (they would crowd them).
 TABLE_ONLY = ("DASP_slant", "DASP_it")
 # (column, title, better) for the plots.
 PLOTS = [
@@ -203,7 +204,7 @@ def main():
     md.append("| method | superpixels delivered (K = 1000) | superpixels in mask | Rec | UE | ASA "
               "| CE depth | CO | time per frame |")
     md.append("|---|---|---|---|---|---|---|---|---|")
-    for m in methods:
+    for m in (m for m in methods if not m.startswith(TABLE_ONLY)):
         r = rows.get((m, 1000))
         if not r:
             continue
