@@ -15,6 +15,10 @@
 #include "run_sums.h"
 #include "simd.h"
 
+#if DASP_AVX512_FUNCTIONS
+#include <immintrin.h>
+#endif
+
 namespace dasp {
 namespace {
 
@@ -97,6 +101,55 @@ DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load,
   return d;
 }
 
+#if DASP_AVX512_FUNCTIONS
+// The inner loop of assignRows for d_DA with AVX-512: spans [first, last) of one row, sixteen
+// pixels at a time. A superpixel's chord in a row is 10 to 60 pixels long, so eight-lane vectors
+// leave many lanes idle at the chord's ends and the loop costs per vector, not per pixel; with
+// sixteen lanes the assignment of a 640x480 frame takes about a fifth less time. The vectors
+// start at multiples of 16 columns (store forwarding, see coverSpanAligned); the loads and stores
+// are masked to the span, so nothing outside the row is read or written, for any image width. As
+// in the eight-lane loop, a pixel takes the cluster only if strictly nearer. The arrays must not
+// alias (the feature rows are only read).
+DASP_AVX512_FUNCTION void assignSpansDepthAdaptive16(const FeatureRow& fr,
+                                                     const ClusterTerms* terms, const int* spans,
+                                                     int first, int last, float* __restrict d_row,
+                                                     int* __restrict l_row) {
+  const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  for (int s = first; s < last; ++s) {
+    const int* span = spans + 3 * s;
+    const int x0 = span[1], x1 = span[2];
+    if (x0 > x1) continue;
+    const ClusterTerms& t = terms[span[0]];
+    const __m512 offset = _mm512_set1_ps(t.offset), cr = _mm512_set1_ps(t.cr),
+                 cg = _mm512_set1_ps(t.cg), cb = _mm512_set1_ps(t.cb), cx = _mm512_set1_ps(t.cx),
+                 cy = _mm512_set1_ps(t.cy), cz = _mm512_set1_ps(t.cz), cnx = _mm512_set1_ps(t.cnx),
+                 cny = _mm512_set1_ps(t.cny), cnz = _mm512_set1_ps(t.cnz);
+    const __m512i id = _mm512_set1_epi32(t.id), first_col = _mm512_set1_epi32(x0),
+                  last_col = _mm512_set1_epi32(x1);
+    for (int c = x0 & ~15; c <= x1; c += 16) {
+      const __m512i col = _mm512_add_epi32(_mm512_set1_epi32(c), lane);
+      const __mmask16 in =
+          _mm512_cmpge_epi32_mask(col, first_col) & _mm512_cmple_epi32_mask(col, last_col);
+      // Two chains of multiply-adds (colour and normal, position) halve the latency.
+      __m512 a = _mm512_fmadd_ps(cr, _mm512_maskz_loadu_ps(in, fr.r + c), offset);
+      __m512 b = _mm512_mul_ps(cg, _mm512_maskz_loadu_ps(in, fr.g + c));
+      a = _mm512_fmadd_ps(cb, _mm512_maskz_loadu_ps(in, fr.b + c), a);
+      b = _mm512_fmadd_ps(cx, _mm512_maskz_loadu_ps(in, fr.x + c), b);
+      a = _mm512_fmadd_ps(cnx, _mm512_maskz_loadu_ps(in, fr.nx + c), a);
+      b = _mm512_fmadd_ps(cy, _mm512_maskz_loadu_ps(in, fr.y + c), b);
+      a = _mm512_fmadd_ps(cny, _mm512_maskz_loadu_ps(in, fr.ny + c), a);
+      b = _mm512_fmadd_ps(cz, _mm512_maskz_loadu_ps(in, fr.z + c), b);
+      a = _mm512_fmadd_ps(cnz, _mm512_maskz_loadu_ps(in, fr.nz + c), a);
+      const __m512 d = _mm512_add_ps(a, b);
+      const __mmask16 closer =
+          _mm512_mask_cmp_ps_mask(in, d, _mm512_maskz_loadu_ps(in, d_row + c), _CMP_LT_OQ);
+      _mm512_mask_storeu_ps(d_row + c, closer, d);
+      _mm512_mask_storeu_epi32(l_row + c, closer, id);
+    }
+  }
+}
+#endif
+
 // The assignment of rows [row_begin, row_end): each pixel to the nearest cluster whose reach
 // disc holds it. Row by row, every cluster whose window meets the row in turn, in cluster order
 // (the order in which alg. 3's cluster-by-cluster loop visits a pixel, so ties go the same
@@ -162,6 +215,9 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
       }
     }
   }
+#if DASP_AVX512_FUNCTIONS
+  const bool avx512 = kKind == MetricKind::kDepthAdaptive && detail::avx512Available();
+#endif
   for (int row = row_begin; row < row_end; ++row) {
     const FeatureRow fr = featureRow(f, row);
     const std::size_t base = static_cast<std::size_t>(row) * width;
@@ -171,6 +227,13 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
       d_row[col] = fr.valid[col] ? kUnreached : kInvalidPixel;
       l_row[col] = -1;
     }
+#if DASP_AVX512_FUNCTIONS
+    if (avx512) {
+      assignSpansDepthAdaptive16(fr, terms, spans, row_start[row - row_begin],
+                                 row_start[row - row_begin + 1], d_row, l_row);
+      continue;
+    }
+#endif
     for (int s = row_start[row - row_begin]; s < row_start[row - row_begin + 1]; ++s) {
       const int* span = spans + 3 * s;
       const int x0 = span[1], x1 = span[2];

@@ -99,9 +99,9 @@ void resizeFeatures(PixelFeatures& features, int width, int height, bool depth) 
   features.width = width;
   features.height = height;
   const std::size_t n = features.size();
-  for (std::vector<float>* v : {&features.r, &features.g, &features.b}) v->resize(n);
+  for (PixelVector<float>* v : {&features.r, &features.g, &features.b}) v->resize(n);
   features.valid.resize(n);
-  for (std::vector<float>* v : {&features.x, &features.y, &features.z, &features.nx, &features.ny,
+  for (PixelVector<float>* v : {&features.x, &features.y, &features.z, &features.nx, &features.ny,
                                 &features.nz, &features.area}) {
     if (depth) {
       v->resize(n);

@@ -14,9 +14,29 @@
 #define DASP_VECTOR_CLONES
 #endif
 
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define DASP_AVX512_FUNCTIONS 1
+// A function written with AVX-512F intrinsics: built for AVX-512F whatever the build's baseline,
+// and called only where avx512Available() says that the processor and the OS run it.
+#define DASP_AVX512_FUNCTION __attribute__((target("avx512f")))
+#else
+#define DASP_AVX512_FUNCTIONS 0
+#endif
+
 namespace dasp::detail {
 
 constexpr int kLanes = 8;  // floats per vector
+
+#if DASP_AVX512_FUNCTIONS
+/// True if the processor supports AVX-512F and the OS saves its registers (checked once).
+inline bool avx512Available() {
+  static const bool available = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") != 0;
+  }();
+  return available;
+}
+#endif
 
 #if defined(__GNUC__) && !defined(__clang__)
 #define DASP_VECTOR_EXTENSIONS 1

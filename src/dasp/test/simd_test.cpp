@@ -1,10 +1,15 @@
-// The internal run and span helpers of the DALIC kernels (src/simd.h) against plain loops.
+// The internal run and span helpers of the DALIC kernels (src/simd.h) against plain loops, and
+// the allocator of the per-pixel arrays they read.
 #include "simd.h"
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <random>
+#include <set>
 #include <vector>
+
+#include "dasp/pixel_allocator.h"
 
 namespace dasp::detail {
 namespace {
@@ -85,6 +90,33 @@ TEST(SimdCoverSpan, VectorsCoverTheSpanInsideTheRow) {
   }
   int start = 0, stop = 0;
   EXPECT_FALSE(coverSpan(0, 3, 5, start, stop));  // rows narrower than a vector: scalar loops
+}
+
+std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
+
+TEST(PixelAllocator, ArraysStartOnDistinctCacheLinesOfAPage) {
+  // Ten images of 640 x 480 floats (exactly 300 pages each), as the features of a frame.
+  std::vector<PixelVector<float>> arrays;
+  for (int i = 0; i < 10; ++i) arrays.emplace_back(640 * 480, static_cast<float>(i));
+  std::set<std::uintptr_t> page_offsets;
+  for (int i = 0; i < 10; ++i) {
+    const PixelVector<float>& a = arrays[static_cast<std::size_t>(i)];
+    EXPECT_EQ(address(a.data()) % 64, 0u) << "array " << i;
+    page_offsets.insert(address(a.data()) % 4096);
+    EXPECT_EQ(a.front(), static_cast<float>(i));
+    EXPECT_EQ(a.back(), static_cast<float>(i));
+  }
+  EXPECT_EQ(page_offsets.size(), 10u);
+  // Copies, growth and small arrays keep the alignment and the contents.
+  PixelVector<float> copy = arrays[3];
+  EXPECT_EQ(copy, arrays[3]);
+  copy.resize(copy.size() + 1000, -1.0f);
+  EXPECT_EQ(address(copy.data()) % 64, 0u);
+  EXPECT_EQ(copy[640 * 480 - 1], 3.0f);
+  EXPECT_EQ(copy.back(), -1.0f);
+  const PixelVector<std::uint8_t> small(3, 1);
+  EXPECT_EQ(address(small.data()) % 64, 0u);
+  EXPECT_EQ(small[2], 1);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "dasp/dasp.h"
+#include "dasp/pixel_allocator.h"
 
 namespace dasp {
 
@@ -20,13 +21,13 @@ struct PixelFeatures {
   int width = 0;
   int height = 0;
   Intrinsics intrinsics;
-  std::vector<float> r, g, b;     ///< Colour in [0, 1].
-  std::vector<float> x, y, z;     ///< 3D point (eq. 3.4), metres, optical frame; 0 if invalid.
-  std::vector<float> nx, ny, nz;  ///< Unit normal towards the camera (eq. 3.8, 3.9); 0 if invalid.
+  PixelVector<float> r, g, b;     ///< Colour in [0, 1].
+  PixelVector<float> x, y, z;     ///< 3D point (eq. 3.4), metres, optical frame; 0 if invalid.
+  PixelVector<float> nx, ny, nz;  ///< Unit normal towards the camera (eq. 3.8, 3.9); 0 if invalid.
   /// 3D surface area seen by the pixel, m^2: (z^2 / (fx fy)) times the slant factor, the
   /// perspective form of sqrt(|grad D|^2 + 1) in eq. 3.14/3.15, clamped to max_slant_factor.
-  std::vector<float> area;
-  std::vector<std::uint8_t> valid;  ///< 1 where depth (or, colour only, the pixel) is usable.
+  PixelVector<float> area;
+  PixelVector<std::uint8_t> valid;  ///< 1 where depth (or, colour only, the pixel) is usable.
   int valid_count = 0;
 
   bool hasDepth() const { return !z.empty(); }
@@ -172,8 +173,8 @@ class Dalic {
   const cv::Mat& density_;
   DalicParams params_;
   std::vector<Cluster> clusters_;
-  std::vector<int> labels_;
-  std::vector<float> distance_;
+  PixelVector<int> labels_;
+  PixelVector<float> distance_;
   struct Scratch;  // working memory of initialize(), assign() and update(), kept across calls
   std::unique_ptr<Scratch> scratch_;
 };
