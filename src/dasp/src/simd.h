@@ -3,6 +3,8 @@
 // floats at a time.
 #pragma once
 
+#include <atomic>
+
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define DASP_ALWAYS_INLINE inline __attribute__((always_inline))
 // The function is built for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA) and the baseline, and the
@@ -28,13 +30,21 @@ namespace dasp::detail {
 constexpr int kLanes = 8;  // floats per vector
 
 #if DASP_AVX512_FUNCTIONS
-/// True if the processor supports AVX-512F and the OS saves its registers (checked once).
+/// Whether the AVX-512 loops may run (default true). Tests turn it off to check the eight-lane
+/// loops on processors with AVX-512 too.
+inline std::atomic<bool>& avx512Allowed() {
+  static std::atomic<bool> allowed{true};
+  return allowed;
+}
+
+/// True if the AVX-512 loops may run: the processor supports AVX-512F, the OS saves its
+/// registers (both checked once), and avx512Allowed().
 inline bool avx512Available() {
-  static const bool available = [] {
+  static const bool supported = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx512f") != 0;
   }();
-  return available;
+  return supported && avx512Allowed().load(std::memory_order_relaxed);
 }
 #endif
 
