@@ -1,6 +1,6 @@
 // Vectorisation helpers of the per-pixel loops (internal to the dasp library): load-time
-// selection of AVX-512 / AVX2 / baseline builds of a function, and GCC vector extensions, eight
-// floats at a time.
+// selection of AVX-512 / AVX2 / baseline builds of a function, GCC vector extensions, eight
+// floats at a time, and the runtime check of functions written with AVX-512 intrinsics.
 #pragma once
 
 #include <atomic>
@@ -11,17 +11,13 @@
 // best one for the CPU is chosen when the library is loaded: Debian builds for the baseline.
 #define DASP_VECTOR_CLONES \
   __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+// A function written with AVX-512F intrinsics: built for AVX-512F whatever the build's baseline,
+// and called only where avx512Available() says that the processor and the OS run it.
+#define DASP_AVX512_FUNCTIONS 1
+#define DASP_AVX512_FUNCTION __attribute__((target("avx512f")))
 #else
 #define DASP_ALWAYS_INLINE inline
 #define DASP_VECTOR_CLONES
-#endif
-
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define DASP_AVX512_FUNCTIONS 1
-// A function written with AVX-512F intrinsics: built for AVX-512F whatever the build's baseline,
-// and called only where avx512Available() says that the processor and the OS run it.
-#define DASP_AVX512_FUNCTION __attribute__((target("avx512f")))
-#else
 #define DASP_AVX512_FUNCTIONS 0
 #endif
 
