@@ -15,8 +15,8 @@ namespace dasp {
 /// sixteen floats (one cache line) at a time with AVX-512. The C library aligns large blocks to
 /// 16 bytes only, so such a load would span two cache lines; and it places same-sized blocks at
 /// the same offset within a page (a 640x480 float image is exactly 300 pages), so the same
-/// index of every array maps to one L1 cache set and the processor suspects each load of
-/// reading a store to another array (4 KiB aliasing). Costs up to one page per array.
+/// index of every array maps to one L1 cache set, and a load can wait for an earlier store to
+/// another array at the same page offset (4 KiB aliasing). Costs up to one page per array.
 template <typename T>
 struct PixelAllocator {
   using value_type = T;
