@@ -97,9 +97,8 @@ def variant_table(rows, ks, methods, columns):
     return lines + [""]
 
 
-def plot(rows, ks, out_dir):
+def plot(rows, ks, methods, out_dir):
     files = []
-    methods = [m for m in methods_of(rows) if not m.startswith(TABLE_ONLY)]
     fig, axes = plt.subplots(3, 4, figsize=(18, 12))
     for ax, (col, title, better) in zip(axes.flat, PLOTS):
         for m in methods:
@@ -174,8 +173,9 @@ def main():
     if not rows:
         raise SystemExit("no rows in " + " ".join(args.folders))
     ks = sorted({k for _, k in rows} - {args.original_count})
-    plots = plot(rows, ks, args.out)
     methods = methods_of(rows)
+    listed = [m for m in methods if not m.startswith(TABLE_ONLY)]  # plots, tables of all methods
+    plots = plot(rows, ks, listed, args.out)
     frames = sorted({int(m.get("frames", 0)) for _, m in meta})
 
     main_meta = next((m for f, m in meta if os.path.basename(f.rstrip("/")) == "main"), {})
@@ -204,7 +204,7 @@ def main():
     md.append("| method | superpixels delivered (K = 1000) | superpixels in mask | Rec | UE | ASA "
               "| CE depth | CO | time per frame |")
     md.append("|---|---|---|---|---|---|---|---|---|")
-    for m in (m for m in methods if not m.startswith(TABLE_ONLY)):
+    for m in listed:
         r = rows.get((m, 1000))
         if not r:
             continue
@@ -291,7 +291,7 @@ def main():
             ("time_ms", "ms", 0)]
     md.append("| method | K | " + " | ".join(c[1] for c in cols) + " |")
     md.append("|---|---|" + "---|" * len(cols))
-    for m in (m for m in methods if not m.startswith(TABLE_ONLY)):
+    for m in listed:
         for k in ks:
             r = rows.get((m, k))
             if not r:
