@@ -97,6 +97,101 @@ def variant_table(rows, ks, methods, columns):
     return lines + [""]
 
 
+# The issue's anchor row of the thesis author's original DASP (K = 1000, 923 superpixels in the
+# mask): (column, name, value, the better direction, digits).
+ORIGINAL_ROW = [("boundary_recall", "Rec", 0.984, "higher", 3),
+                ("ue_np", "UE", 0.0037, "lower", 4),
+                ("asa", "ASA", 0.9982, "higher", 4),
+                ("ce_depth_mm", "CE depth", 6.9, "lower", 2),
+                ("co_ipq", "CO", 0.95, "higher", 3)]
+QUALITY_PEERS = ["ASP_RGB", "SLIC", "VCCS"]
+
+
+def bench_figures(lines):
+    """The bar-relevant figures of the bench console output (None where a line is missing)."""
+    figures = {"ratio": None, "k": {}, "pixels": {}}
+    for line in lines:
+        m = re.search(r"alternating frames, CPU time: ([0-9.]+)", line)
+        if m:
+            figures["ratio"] = float(m.group(1))
+        m = re.match(r"^\s+K =\s*(\d+): DASP\s+[0-9.]+ ms \(x([0-9.]+)\), OpenCV SLIC\s+[0-9.]+ ms "
+                     r"\(x([0-9.]+)\)", line)
+        if m:
+            figures["k"][int(m.group(1))] = (float(m.group(2)), float(m.group(3)))
+        m = re.match(r"^\s+([0-9.]+)x the pixels:.*time x([0-9.]+), time per pixel x([0-9.]+)",
+                     line)
+        if m:
+            figures["pixels"][float(m.group(1))] = (float(m.group(2)), float(m.group(3)))
+    return figures
+
+
+def bar_summary(rows, ks, original_count, bench_lines):
+    """Markdown lines: each bar of issue 3, the figure measured on this page, met or not."""
+    def yes(ok):
+        return "yes" if ok else "**no**"
+
+    lines = ["## The issue's bars at a glance\n",
+             "Computed by the script from the tables and the benchmark below (the issue names the "
+             "bars; the figures are this page's).\n",
+             "| bar | measured here | met |", "|---|---|---|"]
+    bench = bench_figures(bench_lines)
+    if bench["ratio"] is not None:
+        lines.append(f"| single-threaded DASP at most 1/8 of OpenCV SLIC's time, same frame, same "
+                     f"run | {bench['ratio']:.3f} (alternating frames, CPU time) | "
+                     f"{yes(bench['ratio'] <= 0.125)} |")
+    if bench["pixels"]:
+        scales = sorted(bench["pixels"])
+        per_pixel = [bench["pixels"][x][1] for x in scales]
+        lines.append("| runtime grows linearly with the pixel count | time per pixel " +
+                     " / ".join(f"x{v:.2f}" for v in per_pixel) + " at " +
+                     " / ".join(f"{x:g}x" for x in scales) + " the pixels | " +
+                     ("yes" if max(per_pixel) <= 1.1 and min(per_pixel) >= 0.9
+                      else "roughly (per-pixel time not within 10 %)") + " |")
+    if bench["k"]:
+        kk = sorted(bench["k"])
+        dasp = [bench["k"][k][0] for k in kk]
+        slic = [bench["k"][k][1] for k in kk]
+        lines.append("| runtime flat in K | DASP " + " / ".join(f"x{v:.2f}" for v in dasp) +
+                     f" at K = {' / '.join(str(k) for k in kk)} (OpenCV SLIC x{min(slic):.2f} to "
+                     f"x{max(slic):.2f}) | {yes(max(dasp) / min(dasp) <= 1.1)} |")
+    quality_ks = [k for k in ks if ("DASP", k) in rows]
+    if quality_ks:
+        worst = max(abs(rows[("DASP", k)]["superpixels"] / k - 1.0) for k in quality_ks)
+        lines.append(f"| the requested K delivered within 2 % | largest deviation "
+                     f"{100 * worst:.2f} % (K = {', '.join(str(k) for k in quality_ks)}) | "
+                     f"{yes(worst <= 0.02)} |")
+        disconnected = max(rows[("DASP", k)].get("disconnected_fraction", 0.0) or 0.0
+                           for k in quality_ks)
+        lines.append(f"| every superpixel connected | largest fraction of superpixels in more "
+                     f"than one piece: {disconnected:.4f} | {yes(disconnected == 0.0)} |")
+        for column, name, digits in (("ue_np", "undersegmentation error (NP)", 4),
+                                     ("ce_depth_mm", "depth compression error (mm)", 2)):
+            misses = []
+            for k in quality_ks:
+                ours = rows[("DASP", k)][column]
+                for peer in QUALITY_PEERS:
+                    theirs = rows.get((peer, k), {}).get(column, "")
+                    if theirs != "" and not ours < theirs:
+                        misses.append(f"K = {k}: {ours:.{digits}f} against {peer} "
+                                      f"{theirs:.{digits}f}")
+            peers = [p for p in QUALITY_PEERS if any((p, k) in rows for k in quality_ks)]
+            lines.append(f"| {name} below {', '.join(peers)} at every K | " +
+                         ("below all at every K" if not misses else "not below at " +
+                          "; ".join(misses)) + f" | {yes(not misses)} |")
+    r = rows.get(("DASP", original_count))
+    if r:
+        parts, ok = [], True
+        for column, name, value, better, digits in ORIGINAL_ROW:
+            ours = r[column]
+            good = ours >= value if better == "higher" else ours <= value
+            ok &= good
+            parts.append(f"{name} {ours:.{digits}f} against {value:g}" +
+                         ("" if good else " (worse)"))
+        lines.append(f"| at least the original DASP on every column at its count (K = "
+                     f"{original_count}) | " + ", ".join(parts) + f" | {yes(ok)} |")
+    return lines + [""]
+
+
 def plot(rows, ks, methods, out_dir):
     files = []
     fig, axes = plt.subplots(3, 4, figsize=(18, 12))
@@ -193,6 +288,10 @@ def main():
               "resolution rescaled per frame until it delivers K within 2 % (at most 6 runs; "
               "the time is per run). DASP enforces connectivity on the surface (no superpixel "
               f"spans a depth jump of more than {100 * jump_ratio:.3g} % of the depth).\n")
+    bench_lines = ([re.sub(r"\x1b\[[0-9;]*m", "", line.rstrip())
+                    for line in open(args.bench, encoding="utf-8")]
+                   if args.bench and os.path.exists(args.bench) else [])
+    md += bar_summary(rows, ks, args.original_count, bench_lines)
     md.append("## K = 1000, the columns of the issue's anchor table\n")
     md.append("Means over all frames. Rec = boundary recall at 2 px (normalised by the "
               "ground-truth boundary), UE = Neubert-Protzel undersegmentation error, ASA = "
@@ -342,9 +441,7 @@ def main():
                   "methods frame by frame and compares their CPU times (the ratio least disturbed by "
                   "other jobs on the machine); the other ratio lines at the end are computed from "
                   "the medians.\n")
-        lines = [re.sub(r"\x1b\[[0-9;]*m", "", line.rstrip())
-                 for line in open(args.bench, encoding="utf-8")]
-        keep = [line for line in lines if "_median" in line or line.startswith("ratio")
+        keep = [line for line in bench_lines if "_median" in line or line.startswith("ratio")
                 or line.startswith("peak memory") or line.startswith("Benchmark")
                 or line.startswith("runtime against") or line.startswith("DASP stages")
                 or re.match(r"^\s+K = ", line) or re.match(r"^\s+features\s", line)
