@@ -72,11 +72,15 @@ struct ClusterTerms {
   float cx, cy, cz;     // -2 (weight / R^2) p_i, z scaled by 1 + weight_depth (d_DA)
   float cnx, cny, cnz;  // -wn n_i (d_DA)
   float offset;         // wc |c_i|^2 (d_DA: + weight (|p_i|^2 + weight_depth z_i^2) / R^2 + wn)
+  // d_DA with a per-cluster radius (depth_exponent != 2): the pixel's own (x^2 + y^2) and z^2
+  // terms, weight / R_i^2 and that times 1 + weight_depth, which differ between clusters and
+  // cannot be dropped. 0 otherwise.
+  float cxy2, cz2;
 };
 
 // The (reduced, see ClusterTerms) distance of pixels to cluster t, for one pixel (float, int)
 // or eight (Vec8f, Vec8i). dv2: squared row offset from the centre (2D metrics).
-template <MetricKind kKind, typename VecF, typename VecI, typename Load>
+template <MetricKind kKind, bool kScaled, typename VecF, typename VecI, typename Load>
 DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load, VecI col,
                                         float dv2) {
   VecF d = t.offset + t.cr * load(&FeatureRow::r) + t.cg * load(&FeatureRow::g) +
@@ -85,6 +89,10 @@ DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load,
     d += t.cx * load(&FeatureRow::x) + t.cy * load(&FeatureRow::y) + t.cz * load(&FeatureRow::z) +
          t.cnx * load(&FeatureRow::nx) + t.cny * load(&FeatureRow::ny) +
          t.cnz * load(&FeatureRow::nz);
+    if constexpr (kScaled) {
+      const VecF x = load(&FeatureRow::x), y = load(&FeatureRow::y), z = load(&FeatureRow::z);
+      d += t.cxy2 * (x * x + y * y) + t.cz2 * (z * z);
+    }
   } else {
     VecF du;
     if constexpr (std::is_same_v<VecF, float>) {
@@ -109,7 +117,8 @@ DASP_ALWAYS_INLINE VecF clusterDistance(const ClusterTerms& t, const Load& load,
 // start at multiples of 16 columns (store forwarding, see coverSpanAligned); the loads and stores
 // are masked to the span, so nothing outside the row is read or written, for any image width. As
 // in the eight-lane loop, a pixel takes the cluster only if strictly nearer. The arrays must not
-// alias (the feature rows are only read).
+// alias (the feature rows are only read). kScaled: clusters have their own radius (cxy2, cz2).
+template <bool kScaled>
 DASP_AVX512_FUNCTION void assignSpansDepthAdaptive16(const FeatureRow& fr,
                                                      const ClusterTerms* terms, const int* spans,
                                                      int first, int last, float* __restrict d_row,
@@ -123,7 +132,8 @@ DASP_AVX512_FUNCTION void assignSpansDepthAdaptive16(const FeatureRow& fr,
     const __m512 offset = _mm512_set1_ps(t.offset), cr = _mm512_set1_ps(t.cr),
                  cg = _mm512_set1_ps(t.cg), cb = _mm512_set1_ps(t.cb), cx = _mm512_set1_ps(t.cx),
                  cy = _mm512_set1_ps(t.cy), cz = _mm512_set1_ps(t.cz), cnx = _mm512_set1_ps(t.cnx),
-                 cny = _mm512_set1_ps(t.cny), cnz = _mm512_set1_ps(t.cnz);
+                 cny = _mm512_set1_ps(t.cny), cnz = _mm512_set1_ps(t.cnz),
+                 cxy2 = _mm512_set1_ps(t.cxy2), cz2 = _mm512_set1_ps(t.cz2);
     const __m512i id = _mm512_set1_epi32(t.id), first_col = _mm512_set1_epi32(x0),
                   last_col = _mm512_set1_epi32(x1);
     for (int c = x0 & ~15; c <= x1; c += 16) {
@@ -136,12 +146,19 @@ DASP_AVX512_FUNCTION void assignSpansDepthAdaptive16(const FeatureRow& fr,
       __m512 a = _mm512_fmadd_ps(cr, _mm512_maskz_loadu_ps(in, fr.r + c), offset);
       __m512 b = _mm512_mul_ps(cg, _mm512_maskz_loadu_ps(in, fr.g + c));
       a = _mm512_fmadd_ps(cb, _mm512_maskz_loadu_ps(in, fr.b + c), a);
-      b = _mm512_fmadd_ps(cx, _mm512_maskz_loadu_ps(in, fr.x + c), b);
+      const __m512 px = _mm512_maskz_loadu_ps(in, fr.x + c),
+                   py = _mm512_maskz_loadu_ps(in, fr.y + c),
+                   pz = _mm512_maskz_loadu_ps(in, fr.z + c);
+      b = _mm512_fmadd_ps(cx, px, b);
       a = _mm512_fmadd_ps(cnx, _mm512_maskz_loadu_ps(in, fr.nx + c), a);
-      b = _mm512_fmadd_ps(cy, _mm512_maskz_loadu_ps(in, fr.y + c), b);
+      b = _mm512_fmadd_ps(cy, py, b);
       a = _mm512_fmadd_ps(cny, _mm512_maskz_loadu_ps(in, fr.ny + c), a);
-      b = _mm512_fmadd_ps(cz, _mm512_maskz_loadu_ps(in, fr.z + c), b);
+      b = _mm512_fmadd_ps(cz, pz, b);
       a = _mm512_fmadd_ps(cnz, _mm512_maskz_loadu_ps(in, fr.nz + c), a);
+      if constexpr (kScaled) {
+        a = _mm512_fmadd_ps(cxy2, _mm512_fmadd_ps(px, px, _mm512_mul_ps(py, py)), a);
+        b = _mm512_fmadd_ps(cz2, _mm512_mul_ps(pz, pz), b);
+      }
       const __m512 d = _mm512_add_ps(a, b);
       const __mmask16 closer =
           _mm512_mask_cmp_ps_mask(in, d, _mm512_maskz_loadu_ps(in, d_row + c), _CMP_LT_OQ);
@@ -158,7 +175,7 @@ DASP_AVX512_FUNCTION void assignSpansDepthAdaptive16(const FeatureRow& fr,
 // way): the row's features stay in the L1 cache for the three or so clusters that reach each
 // pixel, where a cluster-by-cluster loop would fetch them from L2 each time.
 // clusters: the indices into terms of the clusters whose window meets the rows, ascending.
-template <MetricKind kKind>
+template <MetricKind kKind, bool kScaled = false>
 DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* terms,
                                    const int* clusters, std::size_t count, int row_begin,
                                    int row_end, float* __restrict dist, int* __restrict label,
@@ -234,8 +251,8 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
     }
 #if DASP_AVX512_FUNCTIONS
     if (avx512) {
-      assignSpansDepthAdaptive16(fr, terms, spans, row_start[row - row_begin],
-                                 row_start[row - row_begin + 1], d_row, l_row);
+      assignSpansDepthAdaptive16<kScaled>(fr, terms, spans, row_start[row - row_begin],
+                                          row_start[row - row_begin + 1], d_row, l_row);
       continue;
     }
 #endif
@@ -255,7 +272,7 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
             const auto load = [&fr, c](const float* FeatureRow::*field) {
               return loadVec<Vec8f>(fr.*field + c);
             };
-            const Vec8f d = clusterDistance<kKind, Vec8f>(t, load, col, dv2);
+            const Vec8f d = clusterDistance<kKind, kScaled, Vec8f>(t, load, col, dv2);
             const Vec8f old = loadVec<Vec8f>(d_row + c);
             const Vec8i closer = (d < old) & (col >= x0) & (col <= x1);
             storeVec(d_row + c, closer ? d : old);
@@ -267,7 +284,7 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
 #endif
       for (int col = x0; col <= x1; ++col) {
         const auto load = [&fr, col](const float* FeatureRow::*field) { return (fr.*field)[col]; };
-        const float d = clusterDistance<kKind, float>(t, load, col, dv2);
+        const float d = clusterDistance<kKind, kScaled, float>(t, load, col, dv2);
         if (d < d_row[col]) {
           d_row[col] = d;
           l_row[col] = t.id;
@@ -283,6 +300,15 @@ DASP_VECTOR_CLONES void assignRowsDepthAdaptive(const PixelFeatures& f, const Cl
                                                 std::vector<int>& scratch) {
   assignRows<MetricKind::kDepthAdaptive>(f, terms, clusters, count, row_begin, row_end, dist, label,
                                          scratch);
+}
+
+DASP_VECTOR_CLONES void assignRowsDepthAdaptiveScaled(const PixelFeatures& f,
+                                                      const ClusterTerms* terms,
+                                                      const int* clusters, std::size_t count,
+                                                      int row_begin, int row_end, float* dist,
+                                                      int* label, std::vector<int>& scratch) {
+  assignRows<MetricKind::kDepthAdaptive, true>(f, terms, clusters, count, row_begin, row_end, dist,
+                                               label, scratch);
 }
 
 DASP_VECTOR_CLONES void assignRowsColor2D(const PixelFeatures& f, const ClusterTerms* terms,
@@ -406,7 +432,10 @@ struct Dalic::Impl {
     t.cg = -2.0f * wc * c.color.y();
     t.cb = -2.0f * wc * c.color.z();
     t.offset = wc * c.color.squaredNorm();
-    const float inv_radius_m2 = 1.0f / (p.radius_m * p.radius_m);
+    const bool scaled = p.metric == MetricKind::kDepthAdaptive && p.depth_exponent != 2.0f;
+    const float radius_m =
+        scaled ? radiusAtDepth(p.radius_m, c.position.z(), p.depth_exponent) : p.radius_m;
+    const float inv_radius_m2 = 1.0f / (radius_m * radius_m);
     if (p.metric == MetricKind::kDepthAdaptive) {
       // The extra depth term weight_depth (z - z_i)^2 expands like the rest: the pixel's own
       // z^2 is the same for every cluster and is dropped.
@@ -415,6 +444,8 @@ struct Dalic::Impl {
       t.cx = -2.0f * spatial * c.position.x();
       t.cy = -2.0f * spatial * c.position.y();
       t.cz = -2.0f * spatial * depth_factor * c.position.z();
+      t.cxy2 = scaled ? spatial : 0.0f;
+      t.cz2 = scaled ? spatial * depth_factor : 0.0f;
       t.cnx = -p.weight_normal * c.normal.x();
       t.cny = -p.weight_normal * c.normal.y();
       t.cnz = -p.weight_normal * c.normal.z();
@@ -489,7 +520,8 @@ struct Dalic::Impl {
   static float radiusPx(const Dalic& self, float depth, float mean_density) {
     const PixelFeatures& f = self.features_;
     if (self.params_.metric == MetricKind::kDepthAdaptive && depth > 0.0f) {
-      return self.params_.radius_m * 0.5f * (f.intrinsics.fx + f.intrinsics.fy) / depth;
+      return radiusAtDepth(self.params_.radius_m, depth, self.params_.depth_exponent) * 0.5f *
+             (f.intrinsics.fx + f.intrinsics.fy) / depth;
     }
     return mean_density > 0.0f ? 1.0f / std::sqrt(kPi * mean_density) : 1.0f;
   }
@@ -534,6 +566,9 @@ void Dalic::reset(const DalicParams& params) {
   }
   if (params.metric != MetricKind::kColor2D && !(params.radius_m > 0.0f)) {
     throw std::invalid_argument("DALIC: radius_m must be positive for the depth metrics");
+  }
+  if (params.metric == MetricKind::kDepthAdaptive) {
+    radiusAtDepth(params.radius_m, 1.0f, params.depth_exponent);  // throws for a bad exponent
   }
   if (!(params.window_multiple > 0.0f)) {
     throw std::invalid_argument("DALIC: window_multiple must be positive");
@@ -628,7 +663,11 @@ void Dalic::assign() {
     const std::size_t count = stripe_clusters[static_cast<std::size_t>(chunk)].size();
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
-        assignRowsDepthAdaptive(f, t, ids, count, row_begin, row_end, dist, label, scratch);
+        if (params_.depth_exponent != 2.0f) {
+          assignRowsDepthAdaptiveScaled(f, t, ids, count, row_begin, row_end, dist, label, scratch);
+        } else {
+          assignRowsDepthAdaptive(f, t, ids, count, row_begin, row_end, dist, label, scratch);
+        }
         break;
       case MetricKind::kColor2D:
         assignRowsColor2D(f, t, ids, count, row_begin, row_end, dist, label, scratch);

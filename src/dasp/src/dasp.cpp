@@ -19,7 +19,8 @@ struct RunParams {
   int iterations;
   bool enforce_connectivity;
   float min_size_fraction;
-  float depth_jump_ratio;  // > 0: connectivity on the surface (RGB-D methods), 0: in the image
+  float depth_jump_ratio;       // > 0: connectivity on the surface (RGB-D methods), 0: in the image
+  float depth_exponent = 2.0f;  // DASP's density exponent: the superpixels' radius_m (fit)
 };
 
 // SPDS/grid/random seeds, DALIC iterations, connectivity and the superpoint fit.
@@ -65,7 +66,8 @@ Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& 
       }
     }
   }
-  result.superpixels = fitSuperpoints(result.labels, features, density, radius_m);
+  result.superpixels =
+      fitSuperpoints(result.labels, features, density, radius_m, run.depth_exponent);
   return result;
 }
 
@@ -87,6 +89,7 @@ DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radiu
   params.weight_depth = config.weight_depth;
   params.window_multiple = config.window_multiple;
   params.radius_m = radius_m;
+  params.depth_exponent = metric == MetricKind::kDepthAdaptive ? config.depth_exponent : 2.0f;
   params.min_size_fraction = config.min_size_fraction;
   params.target_count = target_count;
   params.threads = config.threads;
@@ -107,10 +110,11 @@ DaspSegmenter::~DaspSegmenter() = default;
 Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   Buffers& b = *buffers_;
   computeFeatures(frame, config_, b.features);  // validates
-  const float radius = config_.size_mode == SizeMode::kCount
-                           ? radiusForCount(b.features, config_.superpixel_count)
-                           : config_.radius_m;
-  computeDepthDensity(b.features, radius, b.density);
+  const float radius =
+      config_.size_mode == SizeMode::kCount
+          ? radiusForCount(b.features, config_.superpixel_count, config_.depth_exponent)
+          : config_.radius_m;
+  computeDepthDensity(b.features, radius, b.density, config_.depth_exponent);
   const DalicParams params =
       dalicParams(config_, MetricKind::kDepthAdaptive, radius,
                   config_.size_mode == SizeMode::kCount ? config_.superpixel_count : 0);
@@ -121,7 +125,7 @@ Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   }
   return cluster(*b.dalic, b.features, b.density, radius,
                  {config_.seeding, config_.seed, config_.iterations, config_.enforce_connectivity,
-                  config_.min_size_fraction, config_.depth_jump_ratio});
+                  config_.min_size_fraction, config_.depth_jump_ratio, config_.depth_exponent});
 }
 
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {

@@ -18,6 +18,16 @@ constexpr int kFeatureChunks = 16;  // row stripes of the per-pixel passes
 
 bool finitePositive(float value) { return std::isfinite(value) && value > 0.0f; }
 
+// The density's depth exponent a as the number k = 2 (2 - a) of factors 1 / sqrt(z) in z^(a - 2)
+// (validated: a in [0, 2] and a multiple of 0.5, so that no per-pixel pow is needed).
+int inverseRootFactors(float depth_exponent) {
+  const float k = 2.0f * (2.0f - depth_exponent);
+  if (!(k >= 0.0f && k <= 4.0f) || k != std::round(k)) {
+    throw std::invalid_argument("DASP: depth_exponent must be one of 0, 0.5, 1, 1.5, 2");
+  }
+  return static_cast<int>(k);
+}
+
 void requireColor(const cv::Mat& color, const char* what) {
   if (color.empty()) throw std::invalid_argument(std::string(what) + ": colour image is empty");
   if (color.type() != CV_8UC3) {
@@ -85,6 +95,7 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config) {
     throw std::invalid_argument("DASP: max_slant_factor must be finite and >= 1");
   }
   if (config.normal_step_px < 1) throw std::invalid_argument("DASP: normal_step_px must be >= 1");
+  inverseRootFactors(config.depth_exponent);  // throws with the reason
   if (!finitePositive(config.depth_jump_ratio)) {
     throw std::invalid_argument("DASP: depth_jump_ratio must be finite and positive");
   }
@@ -324,32 +335,69 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
   });
 }
 
-float radiusForCount(const PixelFeatures& features, int count) {
+namespace {
+
+// (z / 1 m)^(a - 2) for k = 2 (2 - a) factors of 1 / sqrt(z); 0 where z <= 0 (invalid depth).
+inline float depthWeight(float z, int k) {
+  if (k == 0) return z > 0.0f ? 1.0f : 0.0f;
+  const float s = z > 0.0f ? 1.0f / std::sqrt(z) : 0.0f;
+  float w = s;
+  for (int i = 1; i < k; ++i) w *= s;
+  return w;
+}
+
+}  // namespace
+
+float radiusAtDepth(float radius_m, float depth_m, float depth_exponent) {
+  const int k = inverseRootFactors(depth_exponent);
+  if (k == 0 || !(depth_m > 0.0f)) return radius_m;
+  const float q = std::sqrt(std::sqrt(depth_m));  // z^(1/4): R z^((2 - a) / 2) = R q^k
+  float r = radius_m;
+  for (int i = 0; i < k; ++i) r *= q;
+  return r;
+}
+
+float radiusForCount(const PixelFeatures& features, int count, float depth_exponent) {
   if (!features.hasDepth()) throw std::invalid_argument("radiusForCount: features have no depth");
   if (count < 1) throw std::invalid_argument("radiusForCount: count must be >= 1");
+  const int k = inverseRootFactors(depth_exponent);
   double total_area = 0.0;
-  for (float a : features.area) total_area += a;
+  if (k == 0) {
+    for (float a : features.area) total_area += a;
+  } else {
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      total_area += features.area[i] * depthWeight(features.z[i], k);
+    }
+  }
   if (!(total_area > 0.0)) throw std::invalid_argument("radiusForCount: no valid surface area");
   return static_cast<float>(std::sqrt(total_area / (kPi * count)));
 }
 
-cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m) {
+cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m, float depth_exponent) {
   cv::Mat density;
-  computeDepthDensity(features, radius_m, density);
+  computeDepthDensity(features, radius_m, density, depth_exponent);
   return density;
 }
 
-void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density) {
+void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density,
+                         float depth_exponent) {
   if (!features.hasDepth()) {
     throw std::invalid_argument("computeDepthDensity: features have no depth");
   }
   if (!finitePositive(radius_m)) {
     throw std::invalid_argument("computeDepthDensity: radius must be finite and positive");
   }
+  const int k = inverseRootFactors(depth_exponent);
   density.create(features.height, features.width, CV_32FC1);
   const float scale = 1.0f / (kPi * radius_m * radius_m);
   float* out = density.ptr<float>();
-  for (std::size_t i = 0; i < features.size(); ++i) out[i] = features.area[i] * scale;
+  if (k == 0) {
+    for (std::size_t i = 0; i < features.size(); ++i) out[i] = features.area[i] * scale;
+  } else {
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      out[i] = features.area[i] * scale * depthWeight(features.z[i], k);
+    }
+  }
 }
 
 cv::Mat computeConstantDensity(const PixelFeatures& features, int count) {

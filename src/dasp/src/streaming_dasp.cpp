@@ -35,9 +35,9 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   const DaspConfig& dc = config_.dasp;
   const PixelFeatures features = computeFeatures(frame, dc);  // validates
   const float radius = dc.size_mode == SizeMode::kCount
-                           ? radiusForCount(features, dc.superpixel_count)
+                           ? radiusForCount(features, dc.superpixel_count, dc.depth_exponent)
                            : dc.radius_m;
-  const cv::Mat density = computeDepthDensity(features, radius);
+  const cv::Mat density = computeDepthDensity(features, radius, dc.depth_exponent);
   const std::uint64_t frame_seed = mixSeed(dc.seed, static_cast<std::uint64_t>(frame_index_));
 
   StreamingDaspFrame out;
@@ -148,7 +148,8 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   }
 
   out.superpixels.labels = labels;
-  out.superpixels.superpixels = fitSuperpoints(labels, features, density, radius);
+  out.superpixels.superpixels =
+      fitSuperpoints(labels, features, density, radius, dc.depth_exponent);
   const std::size_t n = out.superpixels.superpixels.size();
   out.predecessor.assign(n, -1);
   out.track_id.assign(n, -1);

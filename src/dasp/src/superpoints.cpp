@@ -450,7 +450,8 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
 }
 
 std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeatures& features,
-                                       const cv::Mat& density, float radius_m) {
+                                       const cv::Mat& density, float radius_m,
+                                       float depth_exponent) {
   if (labels.type() != CV_32SC1 || labels.cols != features.width ||
       labels.rows != features.height) {
     throw std::invalid_argument("fitSuperpoints: labels must be CV_32SC1 of the features' size");
@@ -479,6 +480,7 @@ std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeature
     if (!depth) continue;
     const Eigen::Vector3d mean = s.position / s.n;
     sp.position = (s.reference + mean).cast<float>();
+    sp.radius_m = radiusAtDepth(radius_m, sp.position.z(), depth_exponent);
     const Eigen::Matrix3d cov = s.scatter / s.n - mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(cov);  // closed form: per-superpixel cost must not grow with K

@@ -26,7 +26,9 @@ float fullDistance(const PixelFeatures& f, const DalicParams& p, const Cluster& 
   if (p.metric == MetricKind::kDepthAdaptive) {
     const Eigen::Vector3f point(f.x[i], f.y[i], f.z[i]);
     const Eigen::Vector3f normal(f.nx[i], f.ny[i], f.nz[i]);
-    d += p.weight_spatial / (p.radius_m * p.radius_m) * (point - c.position).squaredNorm() +
+    // Each cluster's own radius (DaspConfig::depth_exponent; radius_m for the thesis' 2).
+    const float radius = radiusAtDepth(p.radius_m, c.position.z(), p.depth_exponent);
+    d += p.weight_spatial / (radius * radius) * (point - c.position).squaredNorm() +
          p.weight_normal * (1.0f - normal.dot(c.normal));
   } else {
     const float du = static_cast<float>(x) - c.u, dv = static_cast<float>(y) - c.v;
@@ -132,21 +134,25 @@ TEST(DalicAssign, DepthAdaptiveMatchesBruteForceNearestCluster) {
 #else
     if (sixteen_lanes) continue;  // no AVX-512 loop in this build
 #endif
-    for (int count : {20, 300}) {
-      DalicParams params;
-      params.radius_m = radiusForCount(f, count);
-      const cv::Mat density = computeDepthDensity(f, params.radius_m);
-      for (int threads : {1, 0}) {
-        params.threads = threads;
-        const Comparison c = compareWithBruteForce(f, density, params, 9);
-        const std::string where = "K = " + std::to_string(count) +
-                                  ", threads = " + std::to_string(threads) +
-                                  (sixteen_lanes ? ", AVX-512 allowed" : ", eight lanes");
-        EXPECT_EQ(c.mismatches, 0) << where;
-        EXPECT_LT(c.ambiguous, c.pixels / 20) << where;
-        EXPECT_GT(c.assigned, c.pixels * 9 / 10) << where;
+    // Depth exponent 1: a radius per cluster (the pixel's own |p|^2 terms stay in the distance).
+    for (const float exponent : {2.0f, 1.0f})
+      for (int count : {20, 300}) {
+        DalicParams params;
+        params.depth_exponent = exponent;
+        params.radius_m = radiusForCount(f, count, exponent);
+        const cv::Mat density = computeDepthDensity(f, params.radius_m, exponent);
+        for (int threads : {1, 0}) {
+          params.threads = threads;
+          const Comparison c = compareWithBruteForce(f, density, params, 9);
+          const std::string where = "K = " + std::to_string(count) +
+                                    ", depth exponent = " + std::to_string(exponent) +
+                                    ", threads = " + std::to_string(threads) +
+                                    (sixteen_lanes ? ", AVX-512 allowed" : ", eight lanes");
+          EXPECT_EQ(c.mismatches, 0) << where;
+          EXPECT_LT(c.ambiguous, c.pixels / 20) << where;
+          EXPECT_GT(c.assigned, c.pixels * 9 / 10) << where;
+        }
       }
-    }
   }
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <vector>
@@ -113,6 +114,62 @@ TEST(DaspDensity, FartherSurfaceGetsQuadraticallyHigherDensity) {
   const cv::Mat density = computeDepthDensity(f, 0.05f);
   // eq. 3.15: rho ~ D^2 for fronto-parallel surfaces.
   EXPECT_NEAR(density.at<float>(2, 2) / density.at<float>(24, 32), 4.0f, 1e-3f);
+}
+
+TEST(DaspDensity, DepthExponentSetsHowDensityGrowsWithDepth) {
+  const RgbdFrame frame = test::twoPlanes(64, 48, 1.0f, 2.0f, nullptr);
+  const PixelFeatures f = computeFeatures(frame);
+  // rho ~ D^a: far (2 m) against near (1 m), fronto-parallel.
+  for (const float exponent : {0.0f, 0.5f, 1.0f, 1.5f, 2.0f}) {
+    const cv::Mat density = computeDepthDensity(f, 0.05f, exponent);
+    EXPECT_NEAR(density.at<float>(2, 2) / density.at<float>(24, 32), std::pow(2.0f, exponent),
+                1e-3f)
+        << "a = " << exponent;
+    const float radius = radiusForCount(f, 37, exponent);
+    EXPECT_NEAR(densityIntegral(computeDepthDensity(f, radius, exponent)), 37.0, 1e-3);
+    // R is the radius at 1 m; at 2 m it is R 2^((2 - a) / 2).
+    EXPECT_FLOAT_EQ(radiusAtDepth(0.05f, 1.0f, exponent), 0.05f);
+    EXPECT_NEAR(radiusAtDepth(0.05f, 2.0f, exponent),
+                0.05f * std::pow(2.0f, 1.0f - 0.5f * exponent), 1e-6f);
+  }
+  EXPECT_FLOAT_EQ(radiusAtDepth(0.05f, 3.7f, 2.0f), 0.05f);
+  for (const float bad : {-0.5f, 0.7f, 2.5f, std::numeric_limits<float>::quiet_NaN()}) {
+    EXPECT_THROW(computeDepthDensity(f, 0.05f, bad), std::invalid_argument) << bad;
+    EXPECT_THROW(radiusForCount(f, 10, bad), std::invalid_argument) << bad;
+    DaspConfig config;
+    config.depth_exponent = bad;
+    EXPECT_THROW(computeDasp(frame, config), std::invalid_argument) << bad;
+  }
+}
+
+// With depth exponent 1 the far plane's superpixels are larger on the surface (radius x sqrt 2
+// at twice the depth) and cover half the pixels of the near plane's, not a quarter (a = 2).
+TEST(Dasp, DepthExponentOneGivesFarSurfacesLargerSuperpixels) {
+  cv::Mat near_mask;
+  const RgbdFrame frame = test::twoPlanes(240, 180, 1.0f, 2.0f, &near_mask);
+  for (const float exponent : {2.0f, 1.0f}) {
+    DaspConfig config;
+    config.superpixel_count = 150;
+    config.depth_exponent = exponent;
+    const Superpixels s = computeDasp(frame, config);
+    double near_pixels = 0.0, far_pixels = 0.0, near_radius = 0.0, far_radius = 0.0;
+    int near_count = 0, far_count = 0;
+    for (const Superpixel& sp : s.superpixels) {
+      if (sp.pixel_count == 0) continue;
+      const bool near = sp.position.z() < 1.5f;
+      (near ? near_pixels : far_pixels) += sp.pixel_count;
+      (near ? near_radius : far_radius) += sp.radius_m;
+      ++(near ? near_count : far_count);
+    }
+    ASSERT_GT(near_count, 5);
+    ASSERT_GT(far_count, 5);
+    const double pixel_ratio = (near_pixels / near_count) / (far_pixels / far_count);
+    EXPECT_NEAR(pixel_ratio, std::pow(2.0, exponent), 0.2 * std::pow(2.0, exponent))
+        << "a = " << exponent;
+    EXPECT_NEAR((far_radius / far_count) / (near_radius / near_count),
+                std::pow(2.0, 1.0 - 0.5 * exponent), 1e-3)
+        << "a = " << exponent;
+  }
 }
 
 TEST(Dasp, SeparatesSameColourPlanesThatColourOnlyCannot) {

@@ -87,6 +87,10 @@ int main(int argc, char** argv) {
                  "DASP/ASP_RGBD relative depth jump of a discontinuity "
                  "(DaspConfig::depth_jump_ratio)")
       ->capture_default_str();
+  app.add_option("--depth-exponent", options.depth_exponent,
+                 "DASP depth exponent of the density, one of 0, 0.5, 1, 1.5, 2 "
+                 "(DaspConfig::depth_exponent)")
+      ->capture_default_str();
   std::string name_suffix;
   app.add_option("--name-suffix", name_suffix,
                  "appended to every method name in the outputs (to merge runs with other "
@@ -261,6 +265,7 @@ int main(int argc, char** argv) {
                               {"dasp_weight_depth", options.weight_depth},
                               {"depth_jump_ratio", options.depth_jump_ratio},
                               {"max_slant_factor", options.max_slant_factor},
+                              {"depth_exponent", options.depth_exponent},
                               {"parallel_frames", threads},
                               {"mask", "object label > 0 and depth > 0"},
                               {"time_ms", "thread CPU time of the method call (single-threaded)"},

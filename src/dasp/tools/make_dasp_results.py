@@ -34,7 +34,7 @@ STYLE = {
 }
 # Variants that appear only in their own tables, not in the plots and the tables of all methods
 # (they would crowd them).
-TABLE_ONLY = ("DASP_slant", "DASP_it")
+TABLE_ONLY = ("DASP_slant", "DASP_it", "DASP_exp")
 # (column, title, better) for the plots.
 PLOTS = [
     ("boundary_recall", "Boundary recall (2 px)", "higher"),
@@ -370,6 +370,39 @@ def main():
                   "the clamped areas, changes with c.\n")
         md += variant_table(rows, ks, ["VCCS", "DASP"] + slants,
                             [("superpixels_in_mask", "in mask", 0)] + QUALITY_COLUMNS)
+    exponents = sorted((m for m in methods if m.startswith("DASP_exp")),
+                       key=lambda m: -float(m[len("DASP_exp"):]))
+    if exponents:
+        md.append("## Depth exponent of the density (DaspConfig::depth_exponent)\n")
+        md.append("DASP (depth_exponent = 2, the default: eq. 3.15, rho ~ D^2 / n_z, every "
+                  "superpixel covers the same 3D area) beside DASP_exp<a>, DASP with rho ~ D^a / "
+                  "n_z and everything else at its default, and PCL VCCS. With a < 2, far surfaces "
+                  "get fewer, larger superpixels (3D radius R (D / 1 m)^((2 - a) / 2)) and near "
+                  "ones more; d_DA measures each cluster against its own radius. The metrics are "
+                  "pixel-weighted, so they reward superpixels spread more evenly over the pixels "
+                  "than the thesis' density spreads them. PCL VCCS, with its single-camera "
+                  "transform (voxels of a size that grows with the depth), also spreads its "
+                  f"superpixels more evenly over the pixels. K = {args.original_count} is the "
+                  "original's count.\n")
+        md += variant_table(rows, sorted(ks + [args.original_count]), ["VCCS", "DASP"] + exponents,
+                            [("superpixels_in_mask", "in mask", 0)] + QUALITY_COLUMNS +
+                            [("time_ms", "ms", 0)])
+        for m in exponents:
+            r = rows.get((m, args.original_count))
+            if r:
+                worse = [name for c, name, value, better, _ in ORIGINAL_ROW
+                         if (float(r[c]) < value if better == "higher" else float(r[c]) > value)]
+                md.append(f"- {m} at K = {args.original_count} against the original DASP's row: " +
+                          ("at least as good on every column" if not worse
+                           else "worse on " + ", ".join(worse)) + ".")
+            above = [f"K = {k}: {float(rows[(m, k)]['ce_depth_mm']):.2f} against "
+                     f"{float(rows[('VCCS', k)]['ce_depth_mm']):.2f}"
+                     for k in ks if (m, k) in rows and ("VCCS", k) in rows and
+                     float(rows[(m, k)]["ce_depth_mm"]) >= float(rows[("VCCS", k)]["ce_depth_mm"])]
+            md.append(f"- {m}, depth CE against PCL VCCS: " +
+                      ("below at every K" if not above else "not below at " + "; ".join(above)) +
+                      ".")
+        md.append("")
     iteration_variants = sorted((m for m in methods if m.startswith("DASP_it")),
                                 key=lambda m: int(m[len("DASP_it"):]))
     if iteration_variants:
@@ -481,7 +514,8 @@ def main():
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, DASP with weight_depth 0.25 and 1 "
               "in two more, DASP with depth_jump_ratio 0.05, with max_slant_factor 2 and 3, "
-              "with 10 and 20 iterations, and DASP at K = "
+              "with 10 and 20 iterations, with depth_exponent 1 and 0.5 (these two also at "
+              f"K = {args.original_count}), and DASP at K = "
               f"{args.original_count} in more runs, PCL VCCS in the last), frames in "
               "parallel (JOBS, default 2) with every method single-threaded, and calls this "
               "script. Per-frame CSV/JSON stay in `build_dir/eval/*/per_frame.*`.\n")

@@ -42,6 +42,13 @@ for iterations in 10 20; do
     --methods DASP --iterations "${iterations}" --name-suffix "_it${iterations}" -k "${KS[@]}" \
     -j "${JOBS}"
 done
+# DASP with the density's depth exponent below the thesis' 2 (DaspConfig::depth_exponent), also
+# at the original's count.
+for exponent in 1 0.5; do
+  "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_exp${exponent}" \
+    --methods DASP --depth-exponent "${exponent}" --name-suffix "_exp${exponent}" \
+    -k "${KS[@]}" "${ORIGINAL_COUNT}" -j "${JOBS}"
+done
 # PCL supervoxels are the slowest method: one separate pass per K.
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/vccs" \
   --methods VCCS -k "${KS[@]}" -j "${JOBS}"
@@ -53,4 +60,5 @@ DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetition
   --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
   "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1" "${BUILD}/eval/dasp_jump0.05" \
   "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}" "${BUILD}/eval/dasp_slant2" "${BUILD}/eval/dasp_slant3" \
-  "${BUILD}/eval/dasp_it10" "${BUILD}/eval/dasp_it20"
+  "${BUILD}/eval/dasp_it10" "${BUILD}/eval/dasp_it20" "${BUILD}/eval/dasp_exp1" \
+  "${BUILD}/eval/dasp_exp0.5"

@@ -82,6 +82,14 @@ struct DaspConfig {
   /// acos(1/clamp) (about 78.5 deg for 5) count as that steep, so noisy depth edges do not
   /// attract huge numbers of superpixels.
   float max_slant_factor = 5.0f;
+  /// Exponent a of the depth in the density, rho ~ D^a / n_z (clamped as above). 2 (default)
+  /// is eq. 3.15: every superpixel covers the same 3D area pi R^2, so far surfaces get many
+  /// superpixels of few pixels. Smaller values give far surfaces fewer, larger superpixels:
+  /// the 3D radius at depth D is R (D / 1 m)^((2 - a) / 2) (R, radius_m or the count mode's
+  /// radius, is then the radius at 1 m) and d_DA measures each cluster's compactness against its
+  /// own radius. 0 is uniform in the image apart from the slant factor. One of 0, 0.5, 1, 1.5, 2
+  /// (powers of 1 / sqrt(D): no per-pixel pow). docs/results/dasp.md measures 1 against 2.
+  float depth_exponent = 2.0f;
   /// Step h in pixels of the depth finite differences for normals (eq. 3.6, 3.7).
   int normal_step_px = 2;
   /// Relative depth jump (|dD| / D) above which two pixels lie across a depth discontinuity:
@@ -128,7 +136,7 @@ struct Superpixel {
   Eigen::Vector3f color = Eigen::Vector3f::Zero();     ///< Mean colour, RGB order, in [0, 1].
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< Mean 3D point, metres, optical frame.
   Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();   ///< Plane-fit unit normal, towards camera.
-  float radius_m = 0.0f;      ///< Nominal 3D radius R used for this superpixel (metres).
+  float radius_m = 0.0f;      ///< Nominal 3D radius R at this superpixel's depth (metres).
   float density = 0.0f;       ///< Density rho at the centre (superpixels per pixel).
   float thickness = 0.0f;     ///< 2d = 4 sqrt(w1), metres (w1 smallest covariance eigenvalue).
   float eccentricity = 0.0f;  ///< sqrt(1 - b^2 / a^2).

@@ -48,14 +48,22 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
 PixelFeatures computeColorFeatures(const cv::Mat& color);
 
 /// Superpixel radius R (metres) for which the depth-adaptive density integrates to `count`
-/// over the valid pixels (eq. 3.17): R = sqrt(sum area / (pi count)).
-float radiusForCount(const PixelFeatures& features, int count);
+/// over the valid pixels (eq. 3.17): R = sqrt(sum area (z / 1 m)^(a - 2) / (pi count)), a the
+/// depth exponent (DaspConfig::depth_exponent; 2: the thesis, R = sqrt(sum area / (pi count))).
+float radiusForCount(const PixelFeatures& features, int count, float depth_exponent = 2.0f);
 
-/// Depth-adaptive density (eq. 3.15): rho(u) = area(u) / (pi R^2) superpixels per pixel,
-/// 0 where depth is invalid. CV_32FC1.
-cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m);
+/// The 3D superpixel radius at depth z for the radius R at 1 m and the depth exponent a:
+/// R (z / 1 m)^((2 - a) / 2); R itself for a = 2 (every depth) or z <= 0.
+float radiusAtDepth(float radius_m, float depth_m, float depth_exponent);
+
+/// Depth-adaptive density (eq. 3.15): rho(u) = area(u) (z / 1 m)^(a - 2) / (pi R^2)
+/// superpixels per pixel (a = 2: area / (pi R^2)), 0 where depth is invalid. CV_32FC1.
+/// depth_exponent: one of 0, 0.5, 1, 1.5, 2 (else std::invalid_argument).
+cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m,
+                            float depth_exponent = 2.0f);
 /// The same into `density`, reusing its storage when the size matches.
-void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density);
+void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density,
+                         float depth_exponent = 2.0f);
 
 /// Constant density over the valid pixels that integrates to `count`. CV_32FC1.
 cv::Mat computeConstantDensity(const PixelFeatures& features, int count);
@@ -110,6 +118,9 @@ struct DalicParams {
   float weight_depth = 0.0f;  ///< kDepthAdaptive only, see DaspConfig::weight_depth.
   float window_multiple = 1.5f;
   float radius_m = 0.02f;  ///< R for kDepthAdaptive / kColorDepth2D (metres).
+  /// kDepthAdaptive: DaspConfig::depth_exponent; a cluster at depth z has the radius
+  /// radiusAtDepth(radius_m, z, depth_exponent) in d_DA and in its window.
+  float depth_exponent = 2.0f;
   /// Purge clusters with fewer pixels than this fraction of their expected area 1/rho.
   float min_size_fraction = 0.1f;
   /// If > 0, after each update the number of clusters is brought to this value by splitting
@@ -197,7 +208,9 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
 
 /// Superpoint fit: per label the mean colour, position and pixel position, plane-fit normal and
 /// eigenvalue shape properties (§3.2.3). labels CV_32SC1 with values -1..n-1.
+/// radius_m and depth_exponent give each superpixel's Superpixel::radius_m (radiusAtDepth).
 std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeatures& features,
-                                       const cv::Mat& density, float radius_m);
+                                       const cv::Mat& density, float radius_m,
+                                       float depth_exponent = 2.0f);
 
 }  // namespace dasp

@@ -75,6 +75,7 @@ MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOption
       config.max_slant_factor = options.max_slant_factor;
       config.weight_depth = options.weight_depth;
       config.depth_jump_ratio = options.depth_jump_ratio;
+      if (method == Method::kDasp) config.depth_exponent = options.depth_exponent;
       Superpixels s =
           method == Method::kDasp ? computeDasp(frame, config) : computeAspRgbd(frame, config);
       result.labels = std::move(s.labels);

@@ -34,6 +34,7 @@ struct MethodOptions {
   float max_slant_factor = DaspConfig{}.max_slant_factor;  ///< DASP density clamp (dasp.h).
   float weight_depth = DaspConfig{}.weight_depth;          ///< DASP depth weight (dasp.h).
   float depth_jump_ratio = DaspConfig{}.depth_jump_ratio;  ///< DASP depth jump (dasp.h).
+  float depth_exponent = DaspConfig{}.depth_exponent;      ///< DASP density exponent (dasp.h).
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
