@@ -56,10 +56,11 @@ constexpr int kClusterAccSize = kRunAccSize + detail::kRunSums;  // floats per c
 // expanded, |f - f_i|^2 = |f|^2 - 2 f . f_i + |f_i|^2 for colour and (d_DA) 3D position, and
 // the pixel's own |f|^2 terms are dropped: they are the same for every cluster the pixel is
 // compared with, so the nearest cluster does not change. What remains is an affine function of
-// the pixel's features, nine multiply-adds for d_DA (eq. 3.20). The rounding error this adds is
-// about 1e-7 |p|^2 / R^2 (1e-3 at 3 m with R = 2 cm) against distances of order 1: it decides
-// only between clusters that are equally near. The 2D position of kColor2D / kColorDepth2D stays
-// a difference (it is not a pixel feature).
+// the pixel's features, nine multiply-adds for d_DA (eq. 3.20). (With a depth exponent other
+// than 2 every cluster has its own radius, |p|^2 / R_i^2 differs between clusters and stays.)
+// The rounding error this adds is about 1e-7 |p|^2 / R^2 (1e-3 at 3 m with R = 2 cm) against
+// distances of order 1: it decides only between clusters that are equally near. The 2D position of
+// kColor2D / kColorDepth2D stays a difference (it is not a pixel feature).
 struct ClusterTerms {
   int x0, x1, y0, y1;  // window, inclusive pixel bounds (never empty: it holds the centre)
   int id;              // cluster index, the label of the pixels it takes
@@ -438,7 +439,8 @@ struct Dalic::Impl {
     const float inv_radius_m2 = 1.0f / (radius_m * radius_m);
     if (p.metric == MetricKind::kDepthAdaptive) {
       // The extra depth term weight_depth (z - z_i)^2 expands like the rest: the pixel's own
-      // z^2 is the same for every cluster and is dropped.
+      // z^2 is the same for every cluster and is dropped, unless the clusters have radii of
+      // their own (cxy2, cz2).
       const float spatial = p.weight_spatial * inv_radius_m2;
       const float depth_factor = 1.0f + p.weight_depth;
       t.cx = -2.0f * spatial * c.position.x();
