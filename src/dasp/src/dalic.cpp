@@ -79,6 +79,12 @@ struct ClusterTerms {
   float cxy2, cz2;
 };
 
+// Whether d_DA gives every cluster its own radius (radiusAtDepth), which needs the cxy2 / cz2
+// terms and the assignment loops that evaluate them.
+bool perClusterRadius(const DalicParams& p) {
+  return p.metric == MetricKind::kDepthAdaptive && p.depth_exponent != 2.0f;
+}
+
 // The (reduced, see ClusterTerms) distance of pixels to cluster t, for one pixel (float, int)
 // or eight (Vec8f, Vec8i). dv2: squared row offset from the centre (2D metrics).
 template <MetricKind kKind, bool kScaled, typename VecF, typename VecI, typename Load>
@@ -433,7 +439,7 @@ struct Dalic::Impl {
     t.cg = -2.0f * wc * c.color.y();
     t.cb = -2.0f * wc * c.color.z();
     t.offset = wc * c.color.squaredNorm();
-    const bool scaled = p.metric == MetricKind::kDepthAdaptive && p.depth_exponent != 2.0f;
+    const bool scaled = perClusterRadius(p);
     const float radius_m =
         scaled ? radiusAtDepth(p.radius_m, c.position.z(), p.depth_exponent) : p.radius_m;
     const float inv_radius_m2 = 1.0f / (radius_m * radius_m);
@@ -665,7 +671,7 @@ void Dalic::assign() {
     const std::size_t count = stripe_clusters[static_cast<std::size_t>(chunk)].size();
     switch (params_.metric) {
       case MetricKind::kDepthAdaptive:
-        if (params_.depth_exponent != 2.0f) {
+        if (perClusterRadius(params_)) {
           assignRowsDepthAdaptiveScaled(f, t, ids, count, row_begin, row_end, dist, label, scratch);
         } else {
           assignRowsDepthAdaptive(f, t, ids, count, row_begin, row_end, dist, label, scratch);

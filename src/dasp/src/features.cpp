@@ -337,9 +337,9 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
 
 namespace {
 
-// (z / 1 m)^(a - 2) for k = 2 (2 - a) factors of 1 / sqrt(z); 0 where z <= 0 (invalid depth).
+// (z / 1 m)^(a - 2) for k = 2 (2 - a) >= 1 factors of 1 / sqrt(z); 0 where z <= 0 (invalid
+// depth). The callers skip it for k = 0 (a = 2), where the weight is 1.
 inline float depthWeight(float z, int k) {
-  if (k == 0) return z > 0.0f ? 1.0f : 0.0f;
   const float s = z > 0.0f ? 1.0f / std::sqrt(z) : 0.0f;
   float w = s;
   for (int i = 1; i < k; ++i) w *= s;

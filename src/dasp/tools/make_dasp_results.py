@@ -380,10 +380,10 @@ def main():
                   "get fewer, larger superpixels (3D radius R (D / 1 m)^((2 - a) / 2)) and near "
                   "ones more; d_DA measures each cluster against its own radius. The metrics are "
                   "pixel-weighted, so they reward superpixels spread more evenly over the pixels "
-                  "than the thesis' density spreads them. PCL VCCS, with its single-camera "
-                  "transform (voxels of a size that grows with the depth), also spreads its "
-                  f"superpixels more evenly over the pixels. K = {args.original_count} is the "
-                  "original's count.\n")
+                  "than the thesis' density spreads them. PCL VCCS runs with its single-camera "
+                  "transform (voxels of a size that grows with the depth), which by its "
+                  "construction also spreads its superpixels more evenly over the pixels (not "
+                  f"measured here). K = {args.original_count} is the original's count.\n")
         md += variant_table(rows, sorted(ks + [args.original_count]), ["VCCS", "DASP"] + exponents,
                             [("superpixels_in_mask", "in mask", 0)] + QUALITY_COLUMNS +
                             [("time_ms", "ms", 0)])
