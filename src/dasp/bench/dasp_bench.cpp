@@ -91,10 +91,11 @@ struct DalicFixture {
   cv::Mat density;
   DalicParams params;
   std::vector<Seed> seeds;
-  explicit DalicFixture(int threads, int count = kCount) {
+  explicit DalicFixture(int threads, int count = kCount,
+                        const RgbdFrame& frame = bench::benchFrame()) {
     DaspConfig c = config(threads);
     c.superpixel_count = count;
-    features = computeFeatures(bench::benchFrame(), c);
+    features = computeFeatures(frame, c);
     params = dalicParams(c, MetricKind::kDepthAdaptive, radiusForCount(features, count), count);
     density = computeDepthDensity(features, params.radius_m);
     seeds = sampleSeeds(density, c.seeding, c.seed);
@@ -192,16 +193,32 @@ void BM_DaspVsOpenCvSlic(benchmark::State& state) {
 BENCHMARK(BM_DaspVsOpenCvSlic)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // Runtime against pixel count: the frame scaled by 2/4 .. 8/4 per axis (0.25x .. 4x pixels),
-// K scaled with the pixel count so that superpixels keep their pixel size.
+// K scaled with the pixel count so that superpixels keep their pixel size. OpenCV SLIC runs on the
+// same scaled frame with the same region size (its superpixels keep their pixel size too), and the
+// two alternate frame by frame, timed in CPU time as in BM_DaspVsOpenCvSlic: the peer, whose work
+// per pixel does not depend on the frame size, shows how the time per pixel grows on this machine
+// with the frame alone (caches).
 void BM_DaspPixels(benchmark::State& state) {
   const RgbdFrame f = scaledFrame(static_cast<int>(state.range(0)));
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(kCount * state.range(0) * state.range(0) / 16);
-  for (auto _ : state) benchmark::DoNotOptimize(computeDasp(f, c));
+  const int previous = cv::getNumThreads();
+  cv::setNumThreads(1);
+  double dasp_ms = 0.0, slic_ms = 0.0;
+  for (auto _ : state) {
+    const double t0 = bench::threadCpuMs();
+    benchmark::DoNotOptimize(computeDasp(f, c));
+    const double t1 = bench::threadCpuMs();
+    benchmark::DoNotOptimize(bench::runOpenCvSlic(f.color));
+    const double t2 = bench::threadCpuMs();
+    dasp_ms += t1 - t0;
+    slic_ms += t2 - t1;
+  }
+  cv::setNumThreads(previous);
+  const double n = static_cast<double>(state.iterations());
   state.counters["pixels"] = static_cast<double>(f.color.total());
-  state.counters["ns_per_pixel"] = benchmark::Counter(
-      static_cast<double>(f.color.total()),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["dasp_cpu_ms"] = dasp_ms / n;
+  state.counters["slic_cpu_ms"] = slic_ms / n;
 }
 BENCHMARK(BM_DaspPixels)
     ->ArgName("quarter_scale")
@@ -248,14 +265,13 @@ int labelRuns(const cv::Mat& labels) {
   return runs;
 }
 
-// Where the growth with K comes from: the DASP stages one by one (the steps computeDasp takes,
-// buffers kept across frames as in DaspSegmenter), each timed in thread CPU time; the counters
-// are ms per frame, and "runs" the label runs of DALIC's last labels.
-void BM_DaspStagesCount(benchmark::State& state) {
+// The DASP stages one by one (the steps computeDasp takes, buffers kept across frames as in
+// DaspSegmenter) on `frame` with K = count, each timed in thread CPU time; the counters are ms per
+// frame, and "runs" the label runs of DALIC's last labels.
+void timeStages(benchmark::State& state, const RgbdFrame& frame, int count) {
   DaspConfig c = config(1);
-  c.superpixel_count = static_cast<int>(state.range(0));
-  const RgbdFrame& frame = bench::benchFrame();
-  DalicFixture fx(1, c.superpixel_count);  // buffers and parameters; refilled every frame
+  c.superpixel_count = count;
+  DalicFixture fx(1, c.superpixel_count, frame);  // buffers and parameters; refilled every frame
   Dalic dalic(fx.features, fx.density, fx.params);
   const cv::Mat valid(fx.features.height, fx.features.width, CV_8UC1, fx.features.valid.data());
   const cv::Mat depth(fx.features.height, fx.features.width, CV_32FC1, fx.features.z.data());
@@ -292,7 +308,23 @@ void BM_DaspStagesCount(benchmark::State& state) {
   for (int stage = 0; stage < kStages; ++stage) state.counters[kStageNames[stage]] = ms[stage] / n;
   state.counters["runs"] = labelRuns(dalic.labels());  // the same every frame
 }
+
+// Where the growth with K comes from: the stages against K at 640x480.
+void BM_DaspStagesCount(benchmark::State& state) {
+  timeStages(state, bench::benchFrame(), static_cast<int>(state.range(0)));
+}
 BENCHMARK(BM_DaspStagesCount)->Apply(countArgs)->Unit(benchmark::kMillisecond);
+
+// Where the growth of the time per pixel comes from: the stages against the pixel count (the
+// frames and K of BM_DaspPixels).
+void BM_DaspStagesPixels(benchmark::State& state) {
+  const int quarter_scale = static_cast<int>(state.range(0));
+  timeStages(state, scaledFrame(quarter_scale), kCount * quarter_scale * quarter_scale / 16);
+}
+BENCHMARK(BM_DaspStagesPixels)
+    ->ArgName("quarter_scale")
+    ->DenseRange(2, 8, 2)
+    ->Unit(benchmark::kMillisecond);
 
 // The peer against K: OpenCV SLIC (10 iterations) with the region size for about K superpixels.
 void BM_OpenCvSlicCount(benchmark::State& state) {
@@ -429,15 +461,48 @@ int main(int argc, char** argv) {
       std::printf(" %12.0f\n", stageCounter(k, "runs"));
     }
   }
-  const double full = find("BM_DaspPixels/quarter_scale:4");
-  if (full > 0) {
-    std::printf("runtime against pixel count (K scaled with it, relative to 640x480):\n");
+  // Runtime against the pixel count: the counters of BM_DaspPixels (CPU time, DASP and OpenCV
+  // SLIC alternating on the same scaled frame), relative to 640x480.
+  const auto pixelCounter = [&](const std::string& bench, int quarter_scale,
+                                const std::string& name) {
+    const auto it = reporter.counters.find(
+        bench + "/quarter_scale:" + std::to_string(quarter_scale) + "." + name);
+    return it == reporter.counters.end() ? -1.0 : it->second;
+  };
+  const double dasp_full = pixelCounter("BM_DaspPixels", 4, "dasp_cpu_ms");
+  const double slic_full = pixelCounter("BM_DaspPixels", 4, "slic_cpu_ms");
+  if (dasp_full > 0 && slic_full > 0) {
+    std::printf(
+        "runtime against pixel count (K scaled with it; CPU time, DASP and OpenCV SLIC alternating "
+        "on the same frame; relative to 640x480):\n");
     for (int q : {2, 4, 6, 8}) {
-      const double t = find("BM_DaspPixels/quarter_scale:" + std::to_string(q));
-      if (t <= 0) continue;
+      const double dasp_t = pixelCounter("BM_DaspPixels", q, "dasp_cpu_ms");
+      const double slic_t = pixelCounter("BM_DaspPixels", q, "slic_cpu_ms");
+      if (dasp_t <= 0 || slic_t <= 0) continue;
       const double pixels = q * q / 16.0;
-      std::printf("  %.2fx the pixels: %7.2f ms, time x%.2f, time per pixel x%.2f\n", pixels, t,
-                  t / full, t / full / pixels);
+      std::printf(
+          "  %.2fx the pixels: %7.2f ms, time x%.2f, time per pixel x%.2f; OpenCV SLIC %7.2f ms, "
+          "time per pixel x%.2f; DASP / SLIC %.3f\n",
+          pixels, dasp_t, dasp_t / dasp_full, dasp_t / dasp_full / pixels, slic_t,
+          slic_t / slic_full / pixels, dasp_t / slic_t);
+    }
+  }
+  // The stages against the pixel count, CPU ms per 640x480 worth of pixels (the same figure at
+  // every size for a stage whose time grows linearly): the counters of BM_DaspStagesPixels.
+  if (pixelCounter("BM_DaspStagesPixels", 4, "assign") > 0) {
+    std::printf(
+        "DASP stages against pixel count (single-threaded, CPU ms per 640x480 worth of pixels; "
+        "label runs per 640x480):\n                 ");
+    for (const char* stage : kStageNames) std::printf(" %12s", stage);
+    std::printf(" %12s\n", "label runs");
+    for (int q : {2, 4, 6, 8}) {
+      if (pixelCounter("BM_DaspStagesPixels", q, "assign") < 0) continue;
+      const double pixels = q * q / 16.0;
+      std::printf("  %.2fx the pixels", pixels);
+      for (const char* stage : kStageNames) {
+        std::printf(" %12.2f", pixelCounter("BM_DaspStagesPixels", q, stage) / pixels);
+      }
+      std::printf(" %12.0f\n", pixelCounter("BM_DaspStagesPixels", q, "runs") / pixels);
     }
   }
   benchmark::Shutdown();
