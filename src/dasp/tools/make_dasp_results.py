@@ -535,19 +535,20 @@ def main():
                                for _, name in growth[:3])
             runs_per = [v[8] for v in per_scale.values()]
             md.append(
-                f"Why the time per pixel grows with the frame. The stage table against the pixel "
+                f"The time per pixel against the frame size. The stage table against the pixel "
                 f"count gives each stage's time per 640x480 worth of pixels: from 1x to {top:g}x "
                 f"the pixels the sum grows by {total:.2f} ms, most in {listed}. The units of "
                 f"work per pixel change far less: the superpixels keep their pixel size, and the "
                 f"label runs per 640x480 range from {min(runs_per):.0f} to {max(runs_per):.0f} "
-                f"(x{max(runs_per) / min(runs_per):.2f}). Each DALIC iteration streams the feature planes of the whole frame "
-                f"(colour, 3D point, normal, density, distance, label: about 50 bytes a pixel, "
-                f"15 MB at 640x480); the larger the frame, the less of them can stay in the "
-                f"caches from one pass to the next (2 MB of L2 a core; the L3 is shared with the "
-                f"host's other machines). That is our reading, not a measurement of cache "
-                f"misses; OpenCV SLIC on the same frames, which streams fewer bytes a pixel, also "
-                f"grows: time per pixel x"
-                f"{bench['slic_pixels'].get(top, float('nan')):.2f} at {top:g}x.\n")
+                f"(x{max(runs_per) / min(runs_per):.2f}). OpenCV SLIC, whose work per pixel "
+                f"is fixed, also takes longer per pixel on the larger frames: x"
+                f"{bench['slic_pixels'].get(top, float('nan')):.2f} at {top:g}x. Why the "
+                f"assignment grows this much is not established. Memory bandwidth seems not to "
+                f"limit it: with two of its nine feature planes read from a small cached block instead "
+                f"(a throw-away experiment with wrong labels) its time did not change, at 1x or "
+                f"at 4x. Nor the order of the clusters' constants in memory: sorting the clusters "
+                f"by position made the assignment slower (probably because neighbouring chords "
+                f"in a row then follow one another and wait for each other's stores).\n")
     md.append("## How to regenerate\n")
     md.append("```\nsrc/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
               "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
