@@ -21,6 +21,7 @@
 
 #include "dasp/rgbd_io.h"
 #include "dasp/stages.h"
+#include "peers/method_options_cli.h"
 #include "peers/methods.h"
 
 namespace {
@@ -75,29 +76,11 @@ int main(int argc, char** argv) {
   app.add_option("--methods", method_names, "DASP ASP_RGB ASP_RGBD SLIC SEEDS VCCS")
       ->capture_default_str();
   app.add_option("-k,--counts", counts, "superpixel counts K")->capture_default_str();
-  app.add_option("--iterations", options.iterations, "DALIC iterations (DASP family)")
-      ->capture_default_str();
-  app.add_option("--seed", options.seed, "random seed (DASP family)")->capture_default_str();
-  app.add_option("--max-slant-factor", options.max_slant_factor,
-                 "DASP density clamp of the slant factor (DaspConfig::max_slant_factor)");
-  app.add_option("--dasp-weight-depth", options.weight_depth,
-                 "DASP extra weight of the depth component (DaspConfig::weight_depth)")
-      ->capture_default_str();
-  app.add_option("--depth-jump-ratio", options.depth_jump_ratio,
-                 "DASP/ASP_RGBD relative depth jump of a discontinuity "
-                 "(DaspConfig::depth_jump_ratio)")
-      ->capture_default_str();
-  app.add_option("--depth-exponent", options.depth_exponent,
-                 "DASP depth exponent of the density, one of 0, 0.5, 1, 1.5, 2 "
-                 "(DaspConfig::depth_exponent)")
-      ->capture_default_str();
+  dasp::peers::addMethodOptions(app, options);
   std::string name_suffix;
   app.add_option("--name-suffix", name_suffix,
                  "appended to every method name in the outputs (to merge runs with other "
                  "options, e.g. DASP_wd1)");
-  app.add_option("--vccs-seed-scale", options.vccs_seed_scale,
-                 "VCCS seed resolution scale (see peers.h)")
-      ->capture_default_str();
   app.add_option("--fx", intrinsics.fx)->capture_default_str();
   app.add_option("--fy", intrinsics.fy)->capture_default_str();
   app.add_option("--cx", intrinsics.cx)->capture_default_str();

@@ -16,6 +16,7 @@
 #include "dasp/metrics.h"
 #include "dasp/rgbd_io.h"
 #include "dasp/stages.h"
+#include "peers/method_options_cli.h"
 #include "peers/methods.h"
 
 namespace {
@@ -123,9 +124,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("-k,--count", options.superpixel_count, "number of superpixels K")
       ->capture_default_str();
-  app.add_option("--iterations", options.iterations, "DALIC iterations (DASP family)")
-      ->capture_default_str();
-  app.add_option("--seed", options.seed, "random seed (DASP family)")->capture_default_str();
+  dasp::peers::addMethodOptions(app, options);
   app.add_option("--threads", options.threads, "threads inside DASP/ASP (0 = all cores)")
       ->capture_default_str();
   app.add_option("--labels", labels_path,
