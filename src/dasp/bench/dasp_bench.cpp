@@ -196,8 +196,8 @@ BENCHMARK(BM_DaspVsOpenCvSlic)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 // K scaled with the pixel count so that superpixels keep their pixel size. OpenCV SLIC runs on the
 // same scaled frame with the same region size (its superpixels keep their pixel size too), and the
 // two alternate frame by frame, timed in CPU time as in BM_DaspVsOpenCvSlic: the peer, whose work
-// per pixel does not depend on the frame size, shows how the time per pixel grows on this machine
-// with the frame alone (caches).
+// per pixel does not depend on the frame size, shows how much the time per pixel grows on this
+// machine with the frame size alone.
 void BM_DaspPixels(benchmark::State& state) {
   const RgbdFrame f = scaledFrame(static_cast<int>(state.range(0)));
   DaspConfig c = config(1);
