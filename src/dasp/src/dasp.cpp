@@ -79,6 +79,12 @@ Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
 
 }  // namespace
 
+float daspRadius(const PixelFeatures& features, const DaspConfig& config) {
+  return config.size_mode == SizeMode::kCount
+             ? radiusForCount(features, config.superpixel_count, config.depth_exponent)
+             : config.radius_m;
+}
+
 DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
                         int target_count) {
   DalicParams params;
@@ -110,10 +116,7 @@ DaspSegmenter::~DaspSegmenter() = default;
 Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   Buffers& b = *buffers_;
   computeFeatures(frame, config_, b.features);  // validates
-  const float radius =
-      config_.size_mode == SizeMode::kCount
-          ? radiusForCount(b.features, config_.superpixel_count, config_.depth_exponent)
-          : config_.radius_m;
+  const float radius = daspRadius(b.features, config_);
   computeDepthDensity(b.features, radius, b.density, config_.depth_exponent);
   const DalicParams params =
       dalicParams(config_, MetricKind::kDepthAdaptive, radius,

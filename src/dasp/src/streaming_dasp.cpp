@@ -34,9 +34,7 @@ void StreamingDasp::reset() {
 StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   const DaspConfig& dc = config_.dasp;
   const PixelFeatures features = computeFeatures(frame, dc);  // validates
-  const float radius = dc.size_mode == SizeMode::kCount
-                           ? radiusForCount(features, dc.superpixel_count, dc.depth_exponent)
-                           : dc.radius_m;
+  const float radius = daspRadius(features, dc);
   const cv::Mat density = computeDepthDensity(features, radius, dc.depth_exponent);
   const std::uint64_t frame_seed = mixSeed(dc.seed, static_cast<std::uint64_t>(frame_index_));
 

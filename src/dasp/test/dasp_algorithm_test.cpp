@@ -108,6 +108,19 @@ TEST(DaspDensity, CountModeDensityIntegratesToK) {
   EXPECT_NEAR(densityIntegral(computeDepthDensity(f, radius)), 37.0, 1e-3);  // eq. 3.17
 }
 
+TEST(DaspDensity, DaspRadiusFollowsTheSizeModeAndExponent) {
+  const RgbdFrame frame = test::twoPlanes(64, 48, 1.0f, 2.0f, nullptr);
+  const PixelFeatures f = computeFeatures(frame);
+  DaspConfig config;
+  config.superpixel_count = 37;
+  config.depth_exponent = 1.0f;
+  EXPECT_FLOAT_EQ(daspRadius(f, config), radiusForCount(f, 37, 1.0f));
+  EXPECT_NE(daspRadius(f, config), radiusForCount(f, 37));  // the exponent is passed on
+  config.size_mode = SizeMode::kRadius;
+  config.radius_m = 0.03f;
+  EXPECT_FLOAT_EQ(daspRadius(f, config), 0.03f);
+}
+
 TEST(DaspDensity, FartherSurfaceGetsQuadraticallyHigherDensity) {
   const RgbdFrame frame = test::twoPlanes(64, 48, 1.0f, 2.0f, nullptr);
   const PixelFeatures f = computeFeatures(frame);

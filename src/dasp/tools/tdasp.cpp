@@ -98,9 +98,7 @@ cv::Mat colourise(const cv::Mat& labels) {
 nlohmann::json ddsChurn(const dasp::RgbdFrame& frame, const dasp::DaspConfig& dasp_config) {
   const dasp::PixelFeatures features = dasp::computeFeatures(frame, dasp_config);
   const cv::Mat density = dasp::computeDepthDensity(
-      features,
-      dasp::radiusForCount(features, dasp_config.superpixel_count, dasp_config.depth_exponent),
-      dasp_config.depth_exponent);
+      features, dasp::daspRadius(features, dasp_config), dasp_config.depth_exponent);
   nlohmann::json out = nlohmann::json::object();
   for (const float smoothing : {0.0f, 0.5f, 1.0f, 2.0f, 3.0f}) {
     double churn = 0.0;

@@ -129,6 +129,11 @@ struct DalicParams {
   int threads = 1;  ///< 1 = single-threaded, 0 = all cores.
 };
 
+/// The radius R (metres, at 1 m for depth exponents other than 2) DASP uses for `config`:
+/// radiusForCount(features, superpixel_count, depth_exponent) in count mode, radius_m in radius
+/// mode.
+float daspRadius(const PixelFeatures& features, const DaspConfig& config);
+
 /// DALIC parameters of the RGB-D methods (DASP, streaming DASP, the naive ASP_RGBD baseline)
 /// from one config: its weights, window, purge fraction and threads, with the given metric,
 /// radius R (metres) and count-control target (0 = none).
