@@ -370,6 +370,14 @@ void EventModelConfig::validate() const {
           "EventModelConfig: refractory_period_us must be >= 0");
   require(std::isfinite(noise_rate_hz_per_pixel) && noise_rate_hz_per_pixel >= 0.0,
           "EventModelConfig: noise_rate_hz_per_pixel must be >= 0");
+  require(std::isfinite(noise_rate_log_sigma) && noise_rate_log_sigma >= 0.0 &&
+              noise_rate_log_sigma <= 5.0,
+          "EventModelConfig: noise_rate_log_sigma must be in [0, 5]");
+  require(
+      std::isfinite(hot_pixel_fraction) && hot_pixel_fraction >= 0.0 && hot_pixel_fraction <= 1.0,
+      "EventModelConfig: hot_pixel_fraction must be in [0, 1]");
+  require(std::isfinite(hot_pixel_rate_hz) && hot_pixel_rate_hz >= 0.0,
+          "EventModelConfig: hot_pixel_rate_hz must be >= 0");
   require(std::isfinite(log_epsilon) && log_epsilon > 0.0,
           "EventModelConfig: log_epsilon must be positive");
 }
@@ -408,17 +416,31 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
                                           double t_begin_s, double t_end_s) const {
   SimulationResult collected;
   EventVector events;
+  std::vector<std::uint8_t> labels;
   collected =
-      simulate(scene, camera_trajectory, t_begin_s, t_end_s, [&events](const EventVector& step) {
-        events.insert(events.end(), step.begin(), step.end());
-      });
+      simulateLabelled(scene, camera_trajectory, t_begin_s, t_end_s,
+                       [&](const EventVector& step, const std::vector<std::uint8_t>& is_noise) {
+                         events.insert(events.end(), step.begin(), step.end());
+                         labels.insert(labels.end(), is_noise.begin(), is_noise.end());
+                       });
   collected.events = std::move(events);
+  collected.noise_labels = std::move(labels);
   return collected;
 }
 
 SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& camera_trajectory,
                                           double t_begin_s, double t_end_s,
                                           const EventSink& sink) const {
+  require(static_cast<bool>(sink), "simulate: no event sink");
+  return simulateLabelled(
+      scene, camera_trajectory, t_begin_s, t_end_s,
+      [&sink](const EventVector& events, const std::vector<std::uint8_t>&) { sink(events); });
+}
+
+SimulationResult EventSimulator::simulateLabelled(const Scene& scene,
+                                                  const Trajectory& camera_trajectory,
+                                                  double t_begin_s, double t_end_s,
+                                                  const LabelledEventSink& sink) const {
   validateScene(scene);
   require(camera_trajectory.size() >= 2, "simulate: the trajectory needs at least two poses");
   validateTrajectory(camera_trajectory, "simulate: camera trajectory");
@@ -473,9 +495,34 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
 
   SimulationResult result;
   const double refractory_s = model.refractory_period_us * 1e-6;
-  const double noise_rate_total = model.noise_rate_hz_per_pixel * static_cast<double>(pixel_count);
+  // Background noise: one Poisson process over the sensor at the total rate, each event at a
+  // pixel drawn with probability proportional to the pixel's rate. Equal rates (no spread, no
+  // hot pixels) draw the pixel uniformly.
+  double noise_rate_total = model.noise_rate_hz_per_pixel * static_cast<double>(pixel_count);
+  std::vector<double> noise_rate_cumulative;  // empty: uniform
+  if (model.noise_rate_log_sigma > 0.0 || model.hot_pixel_fraction > 0.0) {
+    std::mt19937_64 rate_rng(model.seed ^ 0x5851f42d4c957f2dULL);
+    std::normal_distribution<double> log_rate(
+        -0.5 * model.noise_rate_log_sigma * model.noise_rate_log_sigma, model.noise_rate_log_sigma);
+    noise_rate_cumulative.resize(pixel_count);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < pixel_count; ++i) {
+      const double spread = model.noise_rate_log_sigma > 0.0 ? std::exp(log_rate(rate_rng)) : 1.0;
+      const bool hot = uniform(rate_rng) < model.hot_pixel_fraction;
+      sum += hot ? model.hot_pixel_rate_hz : model.noise_rate_hz_per_pixel * spread;
+      noise_rate_cumulative[i] = sum;
+    }
+    noise_rate_total = sum;
+  }
   std::exponential_distribution<double> noise_gap(noise_rate_total > 0.0 ? noise_rate_total : 1.0);
   std::uniform_int_distribution<std::size_t> noise_pixel(0, pixel_count - 1);
+  const auto drawNoisePixel = [&]() -> std::size_t {
+    if (noise_rate_cumulative.empty()) return noise_pixel(noise_rng);
+    const double u = uniform(noise_rng) * noise_rate_total;
+    const auto it = std::upper_bound(noise_rate_cumulative.begin(), noise_rate_cumulative.end(), u);
+    return std::min<std::size_t>(pixel_count - 1,
+                                 static_cast<std::size_t>(it - noise_rate_cumulative.begin()));
+  };
   double next_noise_s = noise_rate_total > 0.0 ? t_begin_s + noise_gap(noise_rng) : kInfinity;
 
   const double base_step_s = 1.0 / config_.render_rate_hz;
@@ -505,6 +552,14 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
   }
 
   EventVector step_events;
+  std::vector<std::uint8_t> step_labels;
+  // Events with their labels, sorted together; the order is the one std::sort gives the events
+  // alone (same comparisons on the same sequence).
+  struct LabelledEvent {
+    Event event;
+    std::uint8_t noise;
+  };
+  std::vector<LabelledEvent> step_sorted;
   double t0 = t_begin_s;
   while (t0 < t_end_s) {
     double t1 = std::min(t0 + base_step_s, t_end_s);
@@ -573,8 +628,9 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
       reference[i] = ref;
     }
     result.signal_events += step_events.size();
+    const std::size_t step_signal = step_events.size();
     while (next_noise_s < t1) {
-      const std::size_t i = noise_pixel(noise_rng);
+      const std::size_t i = drawNoisePixel();
       Event event;
       event.t_us = std::llround(next_noise_s * 1e6);
       event.x = static_cast<std::uint16_t>(i % width);
@@ -584,12 +640,24 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
       ++result.noise_events;
       next_noise_s += noise_gap(noise_rng);
     }
-    std::sort(step_events.begin(), step_events.end(), [](const Event& a, const Event& b) {
-      if (a.t_us != b.t_us) return a.t_us < b.t_us;
-      if (a.y != b.y) return a.y < b.y;
-      return a.x < b.x;
-    });
-    if (!step_events.empty()) sink(step_events);
+    step_sorted.resize(step_events.size());
+    for (std::size_t k = 0; k < step_events.size(); ++k) {
+      step_sorted[k] = {step_events[k], static_cast<std::uint8_t>(k >= step_signal)};
+    }
+    std::sort(step_sorted.begin(), step_sorted.end(),
+              [](const LabelledEvent& la, const LabelledEvent& lb) {
+                const Event& a = la.event;
+                const Event& b = lb.event;
+                if (a.t_us != b.t_us) return a.t_us < b.t_us;
+                if (a.y != b.y) return a.y < b.y;
+                return a.x < b.x;
+              });
+    step_labels.resize(step_sorted.size());
+    for (std::size_t k = 0; k < step_sorted.size(); ++k) {
+      step_events[k] = step_sorted[k].event;
+      step_labels[k] = step_sorted[k].noise;
+    }
+    if (!step_events.empty()) sink(step_events, step_labels);
     log_previous.swap(log_current);
     pose = next_pose;
     t0 = t1;

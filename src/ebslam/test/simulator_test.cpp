@@ -312,6 +312,86 @@ TEST(EventSimulator, StaticCameraGivesOnlyNoiseEvents) {
   EXPECT_TRUE(EventSimulator(config).simulate(scene, still, 0.0, 2.0).events.empty());
 }
 
+// Labels: signal events where the camera moves, noise events match the noise count, and the
+// labelled sink sees the same events as the plain one.
+TEST(EventSimulator, NoiseLabelsMarkTheNoiseEvents) {
+  SimulatorConfig config;
+  config.events.noise_rate_hz_per_pixel = 1.0;
+  const Scene scene = ceilingWith(makeLinesAndCirclesTexture(), 0.01);
+  const Trajectory path = straightPath(0.0, 0.0, 0.5, 0.0, 0.0, 1.0);
+  const EventSimulator simulator(config);
+  const SimulationResult result = simulator.simulate(scene, path, 0.0, 1.0);
+  ASSERT_EQ(result.noise_labels.size(), result.events.size());
+  const auto noise = static_cast<std::size_t>(
+      std::count(result.noise_labels.begin(), result.noise_labels.end(), std::uint8_t{1}));
+  EXPECT_EQ(noise, result.noise_events);
+  EXPECT_GT(result.signal_events, 10000u);
+  EXPECT_GT(result.noise_events, 10000u);
+  EventVector streamed;
+  simulator.simulate(scene, path, 0.0, 1.0, [&](const EventVector& e) {
+    streamed.insert(streamed.end(), e.begin(), e.end());
+  });
+  EXPECT_EQ(streamed, result.events);
+
+  // Without noise every event is signal; the signal events are the same as with noise.
+  config.events.noise_rate_hz_per_pixel = 0.0;
+  const SimulationResult clean = EventSimulator(config).simulate(scene, path, 0.0, 1.0);
+  EventVector signal;
+  for (std::size_t i = 0; i < result.events.size(); ++i) {
+    if (!result.noise_labels[i]) signal.push_back(result.events[i]);
+  }
+  EXPECT_EQ(signal.size(), clean.events.size());
+  EXPECT_EQ(std::count(clean.noise_labels.begin(), clean.noise_labels.end(), std::uint8_t{1}), 0);
+}
+
+// Per-pixel rates: a log-normal spread keeps the mean rate but concentrates the noise on fewer
+// pixels; hot pixels fire at their own rate; the fixed pattern does not change with the knobs.
+TEST(EventSimulator, NoiseRateSpreadAndHotPixels) {
+  SimulatorConfig config;
+  config.events.noise_rate_hz_per_pixel = 2.0;
+  const Scene scene = ceilingWith(makeLinesAndCirclesTexture(), 0.01);
+  const Trajectory still = {se2ToFloorPose(0.0, 0.2, 0.1, 0.3), se2ToFloorPose(4.0, 0.2, 0.1, 0.3)};
+  const auto perPixel = [&](const SimulatorConfig& c) {
+    const SimulationResult r = EventSimulator(c).simulate(scene, still, 0.0, 4.0);
+    std::vector<int> counts(128 * 128, 0);
+    for (const Event& e : r.events) ++counts[e.y * 128 + e.x];
+    return counts;
+  };
+  const auto variance = [](const std::vector<int>& counts, double& mean) {
+    mean = 0.0;
+    for (int c : counts) mean += c;
+    mean /= counts.size();
+    double var = 0.0;
+    for (int c : counts) var += (c - mean) * (c - mean);
+    return var / counts.size();
+  };
+  double mean_uniform = 0.0, mean_spread = 0.0;
+  const double var_uniform = variance(perPixel(config), mean_uniform);
+  EXPECT_NEAR(mean_uniform, 8.0, 0.2);
+  EXPECT_NEAR(var_uniform, 8.0, 0.6);  // Poisson: variance = mean
+  config.events.noise_rate_log_sigma = 1.0;
+  const double var_spread = variance(perPixel(config), mean_spread);
+  EXPECT_NEAR(mean_spread, 8.0, 0.5);  // mean kept
+  // Mixed Poisson: var = mean + mean^2 (e^{sigma^2} - 1) = 8 + 64 * 1.718 = 118.
+  EXPECT_GT(var_spread, 60.0);
+
+  config.events.noise_rate_log_sigma = 0.0;
+  config.events.hot_pixel_fraction = 0.01;
+  config.events.hot_pixel_rate_hz = 100.0;
+  const std::vector<int> counts = perPixel(config);
+  const auto hot = std::count_if(counts.begin(), counts.end(), [](int c) { return c > 200; });
+  EXPECT_NEAR(static_cast<double>(hot), 0.01 * 128 * 128, 40.0);
+
+  config.events.hot_pixel_fraction = 1.5;
+  EXPECT_THROW(EventSimulator{config}, std::invalid_argument);
+  config.events.hot_pixel_fraction = 0.0;
+  config.events.noise_rate_log_sigma = -1.0;
+  EXPECT_THROW(EventSimulator{config}, std::invalid_argument);
+  config.events.noise_rate_log_sigma = 0.0;
+  config.events.hot_pixel_rate_hz = std::nan("");
+  EXPECT_THROW(EventSimulator{config}, std::invalid_argument);
+}
+
 // A change of several thresholds within one render step fires several events in one pixel,
 // at increasing interpolated times and all of one polarity.
 TEST(EventSimulator, SeveralThresholdCrossingsInOneStepGiveSeveralEvents) {

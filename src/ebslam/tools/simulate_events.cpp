@@ -214,6 +214,15 @@ int main(int argc, char** argv) {
   app.add_option("--noise-rate", config.events.noise_rate_hz_per_pixel,
                  "background noise events per pixel and second")
       ->capture_default_str();
+  app.add_option("--noise-log-sigma", config.events.noise_rate_log_sigma,
+                 "spread of the noise rate across pixels: std. dev. of its natural log")
+      ->capture_default_str();
+  app.add_option("--hot-pixel-fraction", config.events.hot_pixel_fraction,
+                 "fraction of hot pixels [0, 1]")
+      ->capture_default_str();
+  app.add_option("--hot-pixel-rate", config.events.hot_pixel_rate_hz,
+                 "noise rate of a hot pixel [Hz]")
+      ->capture_default_str();
   app.add_option("--render-rate", config.render_rate_hz, "minimum render rate [Hz]")
       ->capture_default_str();
   app.add_option("--max-step-px", config.max_step_motion_px,

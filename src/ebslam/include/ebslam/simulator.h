@@ -12,7 +12,8 @@
 // level; the reference then moves by one threshold, so a change of several thresholds between
 // two render steps gives several events, their times interpolated linearly between the steps.
 // Thresholds have a per-pixel mismatch, a pixel is blind for a refractory period after an
-// event, and background noise events arrive as a Poisson process. Everything random is seeded.
+// event, and background noise events arrive as a Poisson process per pixel (rates optionally
+// spread log-normally across pixels, plus hot pixels). Everything random is seeded.
 //
 // Time: event timestamps are the trajectory's own clock in microseconds, round(t_s * 1e6), so
 // events and the ground-truth trajectory share one clock (the floor-robot trajectories start
@@ -80,15 +81,28 @@ struct EventModelConfig {
   /// Dead time after an event [us]; the eDVS' is about 100 us (thesis table 6.2). Crossings
   /// during it emit no event but still move the reference level.
   double refractory_period_us = 100.0;
-  /// Background activity per pixel [Hz]; random pixel, polarity and time (Poisson process).
+  /// Background activity per pixel [Hz], the mean over the pixels; random pixel, polarity and
+  /// time (Poisson process). Real DVS128-class sensors show 0.1-1 Hz and more (it rises with
+  /// temperature and in dim light).
   double noise_rate_hz_per_pixel = 0.1;
+  /// Spread of the background rate across pixels: standard deviation of the natural log of a
+  /// pixel's rate (log-normal, scaled so that the mean stays noise_rate_hz_per_pixel). Measured
+  /// DVS background rates vary by about an order of magnitude between pixels (sigma ~ 1);
+  /// 0 = every pixel at the same rate.
+  double noise_rate_log_sigma = 0.0;
+  /// Fraction of hot pixels in [0, 1]: pixels (chosen at random) that fire noise at
+  /// hot_pixel_rate_hz instead of their background rate.
+  double hot_pixel_fraction = 0.0;
+  double hot_pixel_rate_hz = 50.0;  ///< noise rate of a hot pixel [Hz]
   /// Added to the intensity before the logarithm (dark current); bounds the log contrast of
   /// black texels.
   double log_epsilon = 0.02;
   /// Start every pixel's reference level at a uniformly random phase inside its threshold band
   /// (as after an unknown history) instead of at its first intensity.
   bool randomize_initial_reference = true;
-  std::uint64_t seed = 1;  ///< seeds threshold mismatch, initial references and noise
+  /// Seeds threshold mismatch, initial references, noise and the per-pixel noise rates
+  /// (separate streams: changing the noise settings leaves the fixed pattern unchanged).
+  std::uint64_t seed = 1;
 
   /// Throws std::invalid_argument with the reason for out-of-range values.
   void validate() const;
@@ -119,7 +133,10 @@ struct SimulatorConfig {
 
 /// Everything a simulation produces.
 struct SimulationResult {
-  EventVector events;             ///< sorted by time, all inside the sensor
+  EventVector events;  ///< sorted by time, all inside the sensor
+  /// Per event of `events`: 1 for a background noise event, 0 for a signal event (intensity
+  /// change); filled by the collecting simulate() only.
+  std::vector<std::uint8_t> noise_labels;
   Trajectory ground_truth;        ///< camera poses (camera -> world) at ground_truth_rate_hz
   std::size_t signal_events = 0;  ///< events from intensity changes
   std::size_t noise_events = 0;   ///< background noise events
@@ -136,6 +153,9 @@ class EventSimulator {
 
   /// Receives the events of one render interval, sorted by time; called in time order.
   using EventSink = std::function<void(const EventVector& events)>;
+  /// As EventSink, with is_noise[i] = 1 when events[i] is a background noise event.
+  using LabelledEventSink =
+      std::function<void(const EventVector& events, const std::vector<std::uint8_t>& is_noise)>;
 
   /// Simulates the camera (pose = camera -> world, camera frame as in CameraModel) moving
   /// along `camera_trajectory` from t_begin_s to t_end_s [s, trajectory clock] and streams the
@@ -145,7 +165,12 @@ class EventSimulator {
   SimulationResult simulate(const Scene& scene, const Trajectory& camera_trajectory,
                             double t_begin_s, double t_end_s, const EventSink& sink) const;
 
-  /// As above, collecting all events in the result.
+  /// As above, with the noise label of every event (for scoring noise filters).
+  SimulationResult simulateLabelled(const Scene& scene, const Trajectory& camera_trajectory,
+                                    double t_begin_s, double t_end_s,
+                                    const LabelledEventSink& sink) const;
+
+  /// As above, collecting all events and their noise labels in the result.
   SimulationResult simulate(const Scene& scene, const Trajectory& camera_trajectory,
                             double t_begin_s, double t_end_s) const;
 
