@@ -5,15 +5,21 @@
 // 0.6 m loop with turning, about 180k events); every iteration processes the whole stream with a
 // fresh filter (construction not timed). Counters: events_per_s (items_per_second),
 // thesis_events_per_s and speedup = events_per_s / thesis_events_per_s.
+// BM_BackgroundActivityFilter: the noise filter (event_denoiser.h) on the same stream with 1 Hz
+// of background activity per pixel added, its cost per event beside the filters' own
+// (ns_per_event; 1e9 / events_per_s of the others).
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <map>
+#include <random>
 #include <utility>
 
 #include "../test/synthetic_ceiling.h"
 #include "ebslam/ebpf.h"
 #include "ebslam/ebslam2d.h"
+#include "ebslam/event_denoiser.h"
 
 namespace {
 
@@ -98,6 +104,49 @@ BENCHMARK(BM_Ebslam2d)
     ->ArgNames({"B", "N"})
     ->ArgsProduct({{1, 3}, {5, 10, 25, 50, 75, 100, 250}})
     ->Unit(benchmark::kMillisecond);
+
+// The synthetic stream with uniform background activity of `rate_hz` per pixel, merged in time.
+EventVector withNoise(const EventVector& signal, double rate_hz, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const double t0 = static_cast<double>(signal.front().t_us);
+  const double t1 = static_cast<double>(signal.back().t_us);
+  std::exponential_distribution<double> gap(rate_hz * 128 * 128 * 1e-6);  // per us
+  std::uniform_int_distribution<int> pixel(0, 127);
+  EventVector events = signal;
+  for (double t = t0 + gap(rng); t < t1; t += gap(rng)) {
+    Event e;
+    e.t_us = static_cast<std::int64_t>(t);
+    e.x = static_cast<std::uint16_t>(pixel(rng));
+    e.y = static_cast<std::uint16_t>(pixel(rng));
+    e.polarity = (rng() & 1u) != 0;
+    events.push_back(e);
+  }
+  std::stable_sort(events.begin(), events.end(),
+                   [](const Event& a, const Event& b) { return a.t_us < b.t_us; });
+  return events;
+}
+
+void BM_BackgroundActivityFilter(benchmark::State& state) {
+  static const EventVector events = withNoise(scenario().events, 1.0, 5);
+  BackgroundActivityFilterConfig config;
+  config.refractory_filter = state.range(0) != 0;
+  EventVector passed;
+  passed.reserve(events.size());
+  for (auto _ : state) {
+    state.PauseTiming();
+    BackgroundActivityFilter filter(config, SensorSize{128, 128});
+    passed.clear();
+    state.ResumeTiming();
+    filter.filter(events, passed);
+    benchmark::DoNotOptimize(passed.data());
+  }
+  const double n = static_cast<double>(state.iterations()) * events.size();
+  state.SetItemsProcessed(static_cast<int64_t>(n));
+  state.counters["events_per_s"] = benchmark::Counter(n, benchmark::Counter::kIsRate);
+  state.counters["ns_per_event"] =
+      benchmark::Counter(n * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_BackgroundActivityFilter)->ArgName("refractory")->Arg(0)->Arg(1);
 
 }  // namespace
 

@@ -7,11 +7,19 @@
 //                          offset; methods ebpf_g0 / ebslam2d_g0 are the G0 sweeps
 //   <traj>/events.ebe, ground_truth.tum, ceiling_edges.png, ceiling.png  (cached simulation)
 //   <traj>/ebpf_s<seed>.tum, slam_N<n>_s<seed>.tum (+ _map.png for the first seed)
+// With --noise-rates, the same trajectories are simulated again at each background-activity rate
+// (<traj>/noise<rate>/, with the simulator's noise label per event) and EB-PF (first K) and
+// EB-SLAM-2D (N = 10) run with --noise-seeds seeds on the raw events ("off") and on the events the
+// background-activity filter passes ("filter"):
+//   noise_runs.csv         the columns of runs.csv plus noise_rate, variant
+//   denoise.csv            signal kept / noise removed of the filter against the labels per
+//                          trajectory, rate and support window
 // docs/results/events2d.md is generated from it by scripts/events2d_report.py; the whole
 // pipeline is scripts/events2d_experiment.sh.
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +28,7 @@
 #include <sstream>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -27,6 +36,7 @@
 
 #include "ebslam/ebpf.h"
 #include "ebslam/ebslam2d.h"
+#include "ebslam/event_denoiser.h"
 #include "ebslam/event_io.h"
 #include "ebslam/simulator.h"
 #include "ebslam/simulator_scenes.h"
@@ -41,22 +51,32 @@ namespace {
 
 struct Simulated {
   EventVector events;
+  std::vector<std::uint8_t> noise_labels;  // 1 = background noise; empty if not known
   Trajectory ground_truth;
   CeilingMap map;
 };
 
 Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duration_s,
-                      std::uint64_t seed) {
+                      std::uint64_t seed, double noise_rate_hz) {
   Simulated s;
   const fs::path events_path = dir / "events.ebe";
+  const fs::path labels_path = dir / "noise_labels.bin";
   const fs::path gt_path = dir / "ground_truth.tum";
   const fs::path edges_path = dir / "ceiling_edges.png";
   const fs::path meta_path = dir / "ceiling_map.txt";
   SimulatorConfig sim;
   sim.events.seed = seed;
+  sim.events.noise_rate_hz_per_pixel = noise_rate_hz;
   if (fs::exists(events_path) && fs::exists(gt_path) && fs::exists(edges_path) &&
       fs::exists(meta_path)) {
     s.events = readEventFile(events_path.string()).events;
+    if (fs::exists(labels_path)) {
+      std::ifstream in(labels_path, std::ios::binary);
+      s.noise_labels.resize(s.events.size());
+      in.read(reinterpret_cast<char*>(s.noise_labels.data()),
+              static_cast<std::streamsize>(s.noise_labels.size()));
+      if (!in) s.noise_labels.clear();
+    }
     s.ground_truth = readTumTrajectory(gt_path.string());
     s.map.edges = cv::imread(edges_path.string(), cv::IMREAD_GRAYSCALE);
     std::ifstream meta(meta_path);
@@ -88,6 +108,7 @@ Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duratio
   const EventSimulator simulator(sim);
   SimulationResult result = simulator.simulate(scene, used, t0, t1);
   s.events = std::move(result.events);
+  s.noise_labels = std::move(result.noise_labels);
   s.ground_truth = std::move(result.ground_truth);
   // Known ceiling map for EB-PF as in fig. 6.8: Canny edges of the ceiling image (here the
   // texture itself, blurred to about half a sensor pixel on the ceiling like CeilingMapConfig).
@@ -104,6 +125,11 @@ Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duratio
   s.map.metres_per_pixel = edge_pixel_m;
   s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * edge_pixel_m);
   writeEventFile(events_path.string(), s.events, SensorSize{128, 128});
+  {
+    std::ofstream out(labels_path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(s.noise_labels.data()),
+              static_cast<std::streamsize>(s.noise_labels.size()));
+  }
   writeTumTrajectory(gt_path.string(), s.ground_truth);
   cv::imwrite(edges_path.string(), s.map.edges);
   cv::Mat intensity8;
@@ -203,6 +229,11 @@ int main(int argc, char** argv) {
   std::string g0_sweep_ebpf = "30,60,100,250";
   std::string g0_sweep_slam = "30,60,100";
   int batch = 3;
+  std::string noise_rates_text;
+  int noise_seeds = 10;
+  std::string denoise_windows_text = "10000,20000,50000,100000,200000";
+  BackgroundActivityFilterConfig denoise;
+  bool noise_only = false;
   app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
       ->capture_default_str();
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
@@ -228,6 +259,20 @@ int main(int argc, char** argv) {
                  "G0 values compared for EB-SLAM-2D at N = 10 (empty: none)")
       ->capture_default_str();
   app.add_option("-B,--batch", batch, "batch size B")->capture_default_str();
+  app.add_option("--noise-rates", noise_rates_text,
+                 "background-activity rates [Hz per pixel] of the noise runs (empty: none)")
+      ->capture_default_str();
+  app.add_option("--noise-seeds", noise_seeds, "filter seeds per noise run")->capture_default_str();
+  app.add_option("--denoise-window-us", denoise.window_us,
+                 "support window of the background-activity filter [us]")
+      ->capture_default_str();
+  app.add_flag("--denoise-refractory", denoise.refractory_filter,
+               "also the per-pixel refractory filter");
+  app.add_flag("--noise-only", noise_only,
+               "only the noise runs (the default-noise runs and G0 sweeps are left out)");
+  app.add_option("--denoise-windows", denoise_windows_text,
+                 "support windows [us] scored against the noise labels")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -240,10 +285,22 @@ int main(int argc, char** argv) {
     if (mocap_files.empty())
       throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
     fs::create_directories(out_dir);
+    const char* header =
+        "trajectory,method,particles,batch,resample,g0,latency_s,seed,events,duration_s,"
+        "rmse_pos_m,rmse_rot_deg,failed,events_per_s,rmse_pos_smoothed_m,rmse_pos_raw_m,"
+        "best_offset_s";
     std::ofstream csv(fs::path(out_dir) / "runs.csv");
-    csv << "trajectory,method,particles,batch,resample,g0,latency_s,seed,events,duration_s,"
-           "rmse_pos_m,rmse_rot_deg,failed,events_per_s,rmse_pos_smoothed_m,rmse_pos_raw_m,"
-           "best_offset_s\n";
+    csv << header << '\n';
+    const std::vector<double> noise_rates = parseList<double>(noise_rates_text);
+    std::ofstream noise_csv, denoise_csv;
+    if (!noise_rates.empty()) {
+      noise_csv.open(fs::path(out_dir) / "noise_runs.csv");
+      noise_csv << header << ",noise_rate,variant\n";
+      denoise_csv.open(fs::path(out_dir) / "denoise.csv");
+      denoise_csv << "trajectory,noise_rate,window_us,min_support,polarity_match,refractory,signal,"
+                     "signal_kept,noise,"
+                     "noise_removed,events_per_s\n";
+    }
     const CeilingCamera camera(CameraModel{}, kThesisCeilingHeightM);
     for (const fs::path& mocap : mocap_files) {
       std::string name = mocap.filename().string();
@@ -251,7 +308,8 @@ int main(int argc, char** argv) {
       if (const auto end = name.find("-groundtruth"); end != std::string::npos) name.resize(end);
       const fs::path dir = fs::path(out_dir) / name;
       const auto sim_start = std::chrono::steady_clock::now();
-      const Simulated run = simulateRun(mocap, dir, duration_s, 1);
+      const Simulated run =
+          simulateRun(mocap, dir, duration_s, 1, EventModelConfig{}.noise_rate_hz_per_pixel);
       const double sim_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
       const double run_duration = run.ground_truth.back().t_s - run.ground_truth.front().t_s;
@@ -275,7 +333,9 @@ int main(int argc, char** argv) {
                                          fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
         }
       }
-      const auto runEbpf = [&](const std::string& method, int k, double g0, int seed, bool save) {
+      const auto runEbpf = [&](const std::string& method, int k, double g0, int seed, bool save,
+                               const EventVector& events, std::ostream& out,
+                               const std::string& suffix) {
         EbpfConfig config;
         config.filter.resample_every = k;
         config.filter.g0 = g0;
@@ -286,10 +346,10 @@ int main(int argc, char** argv) {
         // As tools::runFilter, recording the compensated and the raw estimate.
         Trajectory estimate, raw;
         const auto t_start = std::chrono::steady_clock::now();
-        for (std::size_t i = 0; i < run.events.size(); i += 100) {
-          const std::size_t n = std::min<std::size_t>(100, run.events.size() - i);
-          filter.process(run.events.data() + i, n);
-          const double t = static_cast<double>(run.events[i + n - 1].t_us) * 1e-6;
+        for (std::size_t i = 0; i < events.size(); i += 100) {
+          const std::size_t n = std::min<std::size_t>(100, events.size() - i);
+          filter.process(events.data() + i, n);
+          const double t = static_cast<double>(events[i + n - 1].t_us) * 1e-6;
           if (!estimate.empty() && t <= estimate.back().t_s) continue;
           estimate.push_back(tools::toStampedPose(t, filter.estimate()));
           raw.push_back(tools::toStampedPose(t, filter.rawEstimate()));
@@ -307,20 +367,22 @@ int main(int argc, char** argv) {
         const double offset = bestTimeOffset(raw, run.ground_truth);
         const bool failed = !(pos <= failure_m);
         const double smoothed = directRmse(meanFiltered(estimate, 10), run.ground_truth).first;
-        csv << name << ',' << method << ',' << config.filter.num_particles << ',' << batch << ','
-            << k << ',' << g0 << ',' << latency_s << ',' << seed << ',' << run.events.size() << ','
+        out << name << ',' << method << ',' << config.filter.num_particles << ',' << batch << ','
+            << k << ',' << g0 << ',' << latency_s << ',' << seed << ',' << events.size() << ','
             << run_duration << ',' << pos << ',' << rot << ',' << failed << ','
-            << run.events.size() / seconds << ',' << smoothed << ',' << pos_raw << ',' << offset
-            << '\n';
-        csv.flush();
+            << events.size() / seconds << ',' << smoothed << ',' << pos_raw << ',' << offset
+            << suffix << '\n';
+        out.flush();
         std::printf(
             "  %-8s N=%3d K=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg (raw %.2f cm, best "
             "offset %+.0f ms), %.0f events/s\n",
             method.c_str(), config.filter.num_particles, k, g0, seed, pos * 100, rot, pos_raw * 100,
-            offset * 1e3, run.events.size() / seconds);
+            offset * 1e3, events.size() / seconds);
         std::fflush(stdout);
       };
-      const auto runSlam = [&](const std::string& method, int n, double g0, int seed, bool save) {
+      const auto runSlam = [&](const std::string& method, int n, double g0, int seed, bool save,
+                               const EventVector& events, std::ostream& out,
+                               const std::string& suffix) {
         Ebslam2dConfig config;
         config.filter.g0 = g0;
         config.filter.batch_size = batch;
@@ -328,7 +390,7 @@ int main(int argc, char** argv) {
         config.filter.seed = static_cast<std::uint64_t>(seed);
         EventSlam2d slam(config, camera, start);
         Trajectory estimate;
-        const double seconds = tools::runFilter(slam, run.events, 100, estimate);
+        const double seconds = tools::runFilter(slam, events, 100, estimate);
         const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
         if (save) {
           writeTumTrajectory((dir / (stem + ".tum")).string(), estimate);
@@ -336,32 +398,92 @@ int main(int argc, char** argv) {
         }
         const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
         const bool failed = !(e.position_rmse_m <= failure_m);
-        csv << name << ',' << method << ',' << n << ',' << batch << ','
-            << config.filter.resample_every << ',' << g0 << ",0," << seed << ','
-            << run.events.size() << ',' << run_duration << ',' << e.position_rmse_m << ','
-            << e.rotation_rmse_deg << ',' << failed << ',' << run.events.size() / seconds
-            << ",,,\n";
-        csv.flush();
+        out << name << ',' << method << ',' << n << ',' << batch << ','
+            << config.filter.resample_every << ',' << g0 << ",0," << seed << ',' << events.size()
+            << ',' << run_duration << ',' << e.position_rmse_m << ',' << e.rotation_rmse_deg << ','
+            << failed << ',' << events.size() / seconds << ",,," << suffix << '\n';
+        out.flush();
         std::printf("  %-8s N=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n",
                     method.c_str(), n, g0, seed, e.position_rmse_m * 100, e.rotation_rmse_deg,
-                    failed ? " (diverged)" : "", run.events.size() / seconds);
+                    failed ? " (diverged)" : "", events.size() / seconds);
         std::fflush(stdout);
       };
       const std::vector<int> ebpf_k = parseList<int>(ebpf_resample_text);
-      for (int k : ebpf_k) {
-        for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf", k, g0_ebpf, seed, true);
+      for (int k : noise_only ? std::vector<int>{} : ebpf_k) {
+        for (int seed = 1; seed <= seeds; ++seed)
+          runEbpf("ebpf", k, g0_ebpf, seed, true, run.events, csv, "");
       }
-      for (int n : parseList<int>(particles_text)) {
-        for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d", n, g0_slam, seed, true);
+      for (int n : noise_only ? std::vector<int>{} : parseList<int>(particles_text)) {
+        for (int seed = 1; seed <= seeds; ++seed)
+          runSlam("ebslam2d", n, g0_slam, seed, true, run.events, csv, "");
       }
       // G0 sweeps over every trajectory and seed: the defaults are chosen on the whole set.
-      for (double g0 : parseList<double>(g0_sweep_ebpf)) {
+      for (double g0 : noise_only ? std::vector<double>{} : parseList<double>(g0_sweep_ebpf)) {
         if (ebpf_k.empty() || g0 == g0_ebpf) continue;  // the main runs above
-        for (int seed = 1; seed <= seeds; ++seed) runEbpf("ebpf_g0", ebpf_k[0], g0, seed, false);
+        for (int seed = 1; seed <= seeds; ++seed)
+          runEbpf("ebpf_g0", ebpf_k[0], g0, seed, false, run.events, csv, "");
       }
-      for (double g0 : parseList<double>(g0_sweep_slam)) {
+      for (double g0 : noise_only ? std::vector<double>{} : parseList<double>(g0_sweep_slam)) {
         if (g0 == g0_slam) continue;
-        for (int seed = 1; seed <= seeds; ++seed) runSlam("ebslam2d_g0", 10, g0, seed, false);
+        for (int seed = 1; seed <= seeds; ++seed)
+          runSlam("ebslam2d_g0", 10, g0, seed, false, run.events, csv, "");
+      }
+      // Noise runs: the same trajectory at other background-activity rates, with and without
+      // the background-activity filter.
+      for (double rate : noise_rates) {
+        char rate_text[32];
+        std::snprintf(rate_text, sizeof rate_text, "%g", rate);
+        const Simulated noisy =
+            simulateRun(mocap, dir / ("noise" + std::string(rate_text)), duration_s, 1, rate);
+        if (noisy.noise_labels.size() != noisy.events.size()) {
+          throw std::runtime_error("no noise labels for " + (dir / rate_text).string() +
+                                   "; delete the folder to simulate it again");
+        }
+        for (int window : parseList<int>(denoise_windows_text)) {
+          for (const auto& [support, polarity] : {std::pair<int, bool>{1, false},
+                                                  {1, true},
+                                                  {2, false},
+                                                  {2, true},
+                                                  {3, true},
+                                                  {4, true}}) {
+            BackgroundActivityFilterConfig c = denoise;
+            c.window_us = window;
+            c.min_support = support;
+            c.polarity_match = polarity;
+            const auto t_start = std::chrono::steady_clock::now();
+            const DenoisingScore d =
+                scoreDenoising(c, SensorSize{128, 128}, noisy.events, noisy.noise_labels);
+            const double seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+            denoise_csv << name << ',' << rate << ',' << window << ',' << support << ',' << polarity
+                        << ',' << c.refractory_filter << ',' << d.signal << ',' << d.signal_kept
+                        << ',' << d.noise << ',' << d.noise_removed << ','
+                        << noisy.events.size() / seconds << '\n';
+            std::printf(
+                "  noise %g Hz, window %d us, support %d%s: signal kept %.1f %%, noise removed "
+                "%.1f %%\n",
+                rate, window, support, polarity ? " same polarity" : "",
+                100.0 * d.signalKeptFraction(), 100.0 * d.noiseRemovedFraction());
+          }
+        }
+        denoise_csv.flush();
+        BackgroundActivityFilter filter(denoise, SensorSize{128, 128});
+        EventVector filtered;
+        filter.filter(noisy.events, filtered);
+        std::printf("  noise %g Hz: %zu events, %zu after the filter\n", rate, noisy.events.size(),
+                    filtered.size());
+        std::fflush(stdout);
+        for (const auto& [variant, events] :
+             {std::pair<std::string, const EventVector*>{"off", &noisy.events},
+              {"filter", &filtered}}) {
+          const std::string suffix = "," + std::string(rate_text) + "," + variant;
+          for (int seed = 1; seed <= noise_seeds; ++seed) {
+            if (!ebpf_k.empty()) {
+              runEbpf("ebpf", ebpf_k[0], g0_ebpf, seed, false, *events, noise_csv, suffix);
+            }
+            runSlam("ebslam2d", 10, g0_slam, seed, false, *events, noise_csv, suffix);
+          }
+        }
       }
     }
   } catch (const std::exception& e) {
