@@ -437,6 +437,292 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
       [&sink](const EventVector& events, const std::vector<std::uint8_t>&) { sink(events); });
 }
 
+struct EventStream::State {
+  State(const SimulatorConfig& c, const Scene& scene, const Eigen::Isometry3d& start_pose,
+        double t_s)
+      : config(c), renderer(config, scene, start_pose), pose(start_pose), t(t_s) {}
+
+  SimulatorConfig config;
+  Renderer renderer;
+  Eigen::Isometry3d pose;
+  double t = 0.0;
+  std::vector<float> threshold_on;
+  std::vector<float> threshold_off;
+  std::vector<float> intensity;
+  std::vector<float> log_previous;
+  std::vector<float> log_current;
+  std::vector<float> reference;
+  std::vector<double> last_event_s;
+  std::mt19937_64 noise_rng;
+  std::uniform_real_distribution<double> uniform{0.0, 1.0};
+  std::exponential_distribution<double> noise_gap;
+  std::uniform_int_distribution<std::size_t> noise_pixel;
+  double noise_rate_total = 0.0;
+  std::vector<double> noise_rate_cumulative;  // empty: uniform
+  double next_noise_s = kInfinity;
+  std::vector<Eigen::Vector3d> probe_rays;  // sensor corners and centre: step-size control
+  EventVector step_events;
+  std::vector<std::uint8_t> step_labels;
+  // Events with their labels, sorted together; the order is the one std::sort gives the events
+  // alone (same comparisons on the same sequence).
+  struct LabelledEvent {
+    Event event;
+    std::uint8_t noise;
+  };
+  std::vector<LabelledEvent> step_sorted;
+  std::size_t signal_events = 0;
+  std::size_t noise_events = 0;
+  std::size_t render_steps = 0;
+
+  std::size_t drawNoisePixel() {
+    if (noise_rate_cumulative.empty()) return noise_pixel(noise_rng);
+    const double u = uniform(noise_rng) * noise_rate_total;
+    const auto it = std::upper_bound(noise_rate_cumulative.begin(), noise_rate_cumulative.end(), u);
+    return std::min<std::size_t>(noise_rate_cumulative.size() - 1,
+                                 static_cast<std::size_t>(it - noise_rate_cumulative.begin()));
+  }
+};
+
+EventStream::EventStream(const SimulatorConfig& config, const Scene& scene,
+                         const Eigen::Isometry3d& start_pose, double t_s) {
+  config.validate();
+  validateScene(scene);
+  require(start_pose.matrix().allFinite() && std::isfinite(t_s),
+          "EventStream: start pose and time must be finite");
+  state_ = std::make_unique<State>(config, scene, start_pose, t_s);
+  State& st = *state_;
+  const CameraModel& camera = st.config.camera;
+  const EventModelConfig& model = st.config.events;
+  const std::size_t pixel_count = static_cast<std::size_t>(camera.width) * camera.height;
+
+  // Independent streams for the fixed pattern (thresholds, initial phase) and the noise, so
+  // that changing the noise rate does not change the thresholds.
+  std::mt19937_64 pattern_rng(model.seed);
+  st.noise_rng.seed(model.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::normal_distribution<double> mismatch(0.0, 1.0);
+
+  st.threshold_on.resize(pixel_count);
+  st.threshold_off.resize(pixel_count);
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    st.threshold_on[i] = static_cast<float>(std::max(
+        model.min_contrast_threshold,
+        model.contrast_threshold_on + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
+    st.threshold_off[i] = static_cast<float>(std::max(
+        model.min_contrast_threshold,
+        model.contrast_threshold_off + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
+  }
+
+  st.log_previous.resize(pixel_count);
+  st.log_current.resize(pixel_count);
+  st.reference.resize(pixel_count);
+  st.last_event_s.assign(pixel_count, -kInfinity);
+  const float epsilon = static_cast<float>(model.log_epsilon);
+  st.renderer.render(st.pose, st.intensity);
+  for (std::size_t i = 0; i < pixel_count; ++i) {
+    st.log_previous[i] = std::log(st.intensity[i] + epsilon);
+    st.reference[i] = st.log_previous[i];
+    if (model.randomize_initial_reference) {
+      // Reference uniformly inside (L - C_on, L + C_off): no pending crossing, random phase.
+      st.reference[i] +=
+          static_cast<float>(-st.threshold_on[i] +
+                             st.uniform(pattern_rng) * (st.threshold_on[i] + st.threshold_off[i]));
+    }
+  }
+
+  // Background noise: one Poisson process over the sensor at the total rate, each event at a
+  // pixel drawn with probability proportional to the pixel's rate. Equal rates (no spread, no
+  // hot pixels) draw the pixel uniformly.
+  st.noise_rate_total = model.noise_rate_hz_per_pixel * static_cast<double>(pixel_count);
+  if (model.noise_rate_log_sigma > 0.0 || model.hot_pixel_fraction > 0.0) {
+    std::mt19937_64 rate_rng(model.seed ^ 0x5851f42d4c957f2dULL);
+    std::normal_distribution<double> log_rate(
+        -0.5 * model.noise_rate_log_sigma * model.noise_rate_log_sigma, model.noise_rate_log_sigma);
+    st.noise_rate_cumulative.resize(pixel_count);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < pixel_count; ++i) {
+      const double spread = model.noise_rate_log_sigma > 0.0 ? std::exp(log_rate(rate_rng)) : 1.0;
+      const bool hot = st.uniform(rate_rng) < model.hot_pixel_fraction;
+      sum += hot ? model.hot_pixel_rate_hz : model.noise_rate_hz_per_pixel * spread;
+      st.noise_rate_cumulative[i] = sum;
+    }
+    st.noise_rate_total = sum;
+  }
+  st.noise_gap =
+      std::exponential_distribution<double>(st.noise_rate_total > 0.0 ? st.noise_rate_total : 1.0);
+  st.noise_pixel = std::uniform_int_distribution<std::size_t>(0, pixel_count - 1);
+  st.next_noise_s = st.noise_rate_total > 0.0 ? t_s + st.noise_gap(st.noise_rng) : kInfinity;
+
+  const std::vector<Eigen::Vector2d> probe_pixels = {{0.0, 0.0},
+                                                     {camera.width - 1.0, 0.0},
+                                                     {0.0, camera.height - 1.0},
+                                                     {camera.width - 1.0, camera.height - 1.0},
+                                                     camera.principal_point};
+  for (const Eigen::Vector2d& pixel : probe_pixels) {
+    if (std::optional<Eigen::Vector3d> ray = camera.backprojectRay(pixel)) {
+      st.probe_rays.push_back(*ray);
+    }
+  }
+}
+
+EventStream::~EventStream() = default;
+EventStream::EventStream(EventStream&&) noexcept = default;
+EventStream& EventStream::operator=(EventStream&&) noexcept = default;
+
+double EventStream::time() const { return state_->t; }
+const Eigen::Isometry3d& EventStream::pose() const { return state_->pose; }
+std::size_t EventStream::signalEvents() const { return state_->signal_events; }
+std::size_t EventStream::noiseEvents() const { return state_->noise_events; }
+std::size_t EventStream::renderSteps() const { return state_->render_steps; }
+
+void EventStream::moveTo(const Eigen::Isometry3d& pose, double t_end_s, EventVector& events,
+                         std::vector<std::uint8_t>* noise_labels) {
+  require(pose.matrix().allFinite(), "EventStream::moveTo: pose is not finite");
+  const Eigen::Isometry3d from = state_->pose;
+  const double t_from = state_->t;
+  const Eigen::Quaterniond q_from(from.linear());
+  const Eigen::Quaterniond q_to(pose.linear());
+  advance(
+      t_end_s,
+      [&](double t) {
+        const double a = std::clamp((t - t_from) / (t_end_s - t_from), 0.0, 1.0);
+        Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+        p.linear() = q_from.slerp(a, q_to).toRotationMatrix();
+        p.translation() = (1.0 - a) * from.translation() + a * pose.translation();
+        return p;
+      },
+      [&](const EventVector& step, const std::vector<std::uint8_t>& is_noise, double) {
+        events.insert(events.end(), step.begin(), step.end());
+        if (noise_labels != nullptr) {
+          noise_labels->insert(noise_labels->end(), is_noise.begin(), is_noise.end());
+        }
+      });
+}
+
+void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink) {
+  State& st = *state_;
+  require(std::isfinite(t_end_s) && t_end_s > st.t,
+          "EventStream::advance: the end time must be finite and after time()");
+  require(static_cast<bool>(pose_at) && static_cast<bool>(sink),
+          "EventStream::advance: no pose function or sink");
+  const CameraModel& camera = st.config.camera;
+  const EventModelConfig& model = st.config.events;
+  const int width = camera.width;
+  const std::size_t pixel_count = static_cast<std::size_t>(camera.width) * camera.height;
+  const float epsilon = static_cast<float>(model.log_epsilon);
+  const double refractory_s = model.refractory_period_us * 1e-6;
+  const double base_step_s = 1.0 / st.config.render_rate_hz;
+  const auto poseAt = [&pose_at](double t) {
+    const Eigen::Isometry3d p = pose_at(t);
+    require(p.matrix().allFinite(), "EventStream::advance: pose_at returned a non-finite pose");
+    return p;
+  };
+
+  double t0 = st.t;
+  while (t0 < t_end_s) {
+    double t1 = std::min(t0 + base_step_s, t_end_s);
+    Eigen::Isometry3d next_pose = poseAt(t1);
+    // Largest image motion of a probe point between the two poses [pixels].
+    double motion_px = 0.0;
+    for (const Eigen::Vector3d& probe : st.probe_rays) {
+      const std::optional<Eigen::Vector3d> world = st.renderer.hitPoint(st.pose, probe);
+      const Eigen::Vector2d start =
+          camera.distort(camera.principal_point + camera.focal_px * probe.head<2>());
+      if (!world) {
+        // No plane: fall back to the rotation alone (points at infinity).
+        const Eigen::Vector3d direction =
+            next_pose.linear().transpose() * (st.pose.linear() * probe);
+        if (const std::optional<Eigen::Vector2d> end = camera.project(direction)) {
+          motion_px = std::max(motion_px, (*end - start).norm());
+        }
+        continue;
+      }
+      const Eigen::Vector3d in_next = next_pose.inverse() * *world;
+      if (const std::optional<Eigen::Vector2d> end = camera.project(in_next)) {
+        motion_px = std::max(motion_px, (*end - start).norm());
+      } else {
+        motion_px = kInfinity;
+      }
+    }
+    if (motion_px > st.config.max_step_motion_px) {
+      const double subdivisions =
+          std::isfinite(motion_px) ? std::ceil(motion_px / st.config.max_step_motion_px) : 64.0;
+      t1 = t0 + (t1 - t0) / std::min(subdivisions, 1e4);
+      next_pose = poseAt(t1);
+    }
+
+    st.renderer.render(next_pose, st.intensity);
+    ++st.render_steps;
+    EventVector& step_events = st.step_events;
+    step_events.clear();
+    const double dt = t1 - t0;
+    for (std::size_t i = 0; i < pixel_count; ++i) {
+      const float l0 = st.log_previous[i];
+      const float l1 = std::log(st.intensity[i] + epsilon);
+      st.log_current[i] = l1;
+      float ref = st.reference[i];
+      const float c_on = st.threshold_on[i];
+      const float c_off = st.threshold_off[i];
+      if (l1 - ref < c_on && ref - l1 < c_off) continue;
+      const float change = l1 - l0;
+      const bool on = l1 > ref;
+      const float c = on ? c_on : c_off;
+      const float direction = on ? 1.0f : -1.0f;
+      // Each crossed level ref +- k c gives one event at the linearly interpolated time.
+      while (on ? (l1 - ref >= c) : (ref - l1 >= c)) {
+        ref += direction * c;
+        double fraction = change != 0.0f ? static_cast<double>(ref - l0) / change : 1.0;
+        fraction = std::clamp(fraction, 0.0, 1.0);
+        const double t_event = t0 + fraction * dt;
+        if (t_event - st.last_event_s[i] >= refractory_s) {
+          st.last_event_s[i] = t_event;
+          Event event;
+          event.t_us = std::llround(t_event * 1e6);
+          event.x = static_cast<std::uint16_t>(i % width);
+          event.y = static_cast<std::uint16_t>(i / width);
+          event.polarity = on;
+          step_events.push_back(event);
+        }
+      }
+      st.reference[i] = ref;
+    }
+    st.signal_events += step_events.size();
+    const std::size_t step_signal = step_events.size();
+    while (st.next_noise_s < t1) {
+      const std::size_t i = st.drawNoisePixel();
+      Event event;
+      event.t_us = std::llround(st.next_noise_s * 1e6);
+      event.x = static_cast<std::uint16_t>(i % width);
+      event.y = static_cast<std::uint16_t>(i / width);
+      event.polarity = st.uniform(st.noise_rng) < 0.5;
+      step_events.push_back(event);
+      ++st.noise_events;
+      st.next_noise_s += st.noise_gap(st.noise_rng);
+    }
+    st.step_sorted.resize(step_events.size());
+    for (std::size_t k = 0; k < step_events.size(); ++k) {
+      st.step_sorted[k] = {step_events[k], static_cast<std::uint8_t>(k >= step_signal)};
+    }
+    std::sort(st.step_sorted.begin(), st.step_sorted.end(),
+              [](const State::LabelledEvent& la, const State::LabelledEvent& lb) {
+                const Event& a = la.event;
+                const Event& b = lb.event;
+                if (a.t_us != b.t_us) return a.t_us < b.t_us;
+                if (a.y != b.y) return a.y < b.y;
+                return a.x < b.x;
+              });
+    st.step_labels.resize(st.step_sorted.size());
+    for (std::size_t k = 0; k < st.step_sorted.size(); ++k) {
+      step_events[k] = st.step_sorted[k].event;
+      st.step_labels[k] = st.step_sorted[k].noise;
+    }
+    st.log_previous.swap(st.log_current);
+    st.pose = next_pose;
+    st.t = t1;
+    t0 = t1;
+    sink(step_events, st.step_labels, t1);
+  }
+}
+
 SimulationResult EventSimulator::simulateLabelled(const Scene& scene,
                                                   const Trajectory& camera_trajectory,
                                                   double t_begin_s, double t_end_s,
@@ -450,82 +736,9 @@ SimulationResult EventSimulator::simulateLabelled(const Scene& scene,
           "simulate: the time range lies outside the trajectory");
   require(static_cast<bool>(sink), "simulate: no event sink");
 
-  const CameraModel& camera = config_.camera;
-  const EventModelConfig& model = config_.events;
-  const int width = camera.width;
-  const std::size_t pixel_count = static_cast<std::size_t>(camera.width) * camera.height;
-
-  // Independent streams for the fixed pattern (thresholds, initial phase) and the noise, so
-  // that changing the noise rate does not change the thresholds.
-  std::mt19937_64 pattern_rng(model.seed);
-  std::mt19937_64 noise_rng(model.seed ^ 0x9e3779b97f4a7c15ULL);
-  std::normal_distribution<double> mismatch(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-
-  std::vector<float> threshold_on(pixel_count);
-  std::vector<float> threshold_off(pixel_count);
-  for (std::size_t i = 0; i < pixel_count; ++i) {
-    threshold_on[i] = static_cast<float>(std::max(
-        model.min_contrast_threshold,
-        model.contrast_threshold_on + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
-    threshold_off[i] = static_cast<float>(std::max(
-        model.min_contrast_threshold,
-        model.contrast_threshold_off + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
-  }
-
-  Eigen::Isometry3d pose = toIsometry(interpolatePose(camera_trajectory, t_begin_s));
-  Renderer renderer(config_, scene, pose);
-  std::vector<float> intensity;
-  std::vector<float> log_previous(pixel_count);
-  std::vector<float> log_current(pixel_count);
-  std::vector<float> reference(pixel_count);
-  std::vector<double> last_event_s(pixel_count, -kInfinity);
-  const float epsilon = static_cast<float>(model.log_epsilon);
-
-  renderer.render(pose, intensity);
-  for (std::size_t i = 0; i < pixel_count; ++i) {
-    log_previous[i] = std::log(intensity[i] + epsilon);
-    reference[i] = log_previous[i];
-    if (model.randomize_initial_reference) {
-      // Reference uniformly inside (L - C_on, L + C_off): no pending crossing, random phase.
-      reference[i] += static_cast<float>(
-          -threshold_on[i] + uniform(pattern_rng) * (threshold_on[i] + threshold_off[i]));
-    }
-  }
-
+  EventStream stream(config_, scene, toIsometry(interpolatePose(camera_trajectory, t_begin_s)),
+                     t_begin_s);
   SimulationResult result;
-  const double refractory_s = model.refractory_period_us * 1e-6;
-  // Background noise: one Poisson process over the sensor at the total rate, each event at a
-  // pixel drawn with probability proportional to the pixel's rate. Equal rates (no spread, no
-  // hot pixels) draw the pixel uniformly.
-  double noise_rate_total = model.noise_rate_hz_per_pixel * static_cast<double>(pixel_count);
-  std::vector<double> noise_rate_cumulative;  // empty: uniform
-  if (model.noise_rate_log_sigma > 0.0 || model.hot_pixel_fraction > 0.0) {
-    std::mt19937_64 rate_rng(model.seed ^ 0x5851f42d4c957f2dULL);
-    std::normal_distribution<double> log_rate(
-        -0.5 * model.noise_rate_log_sigma * model.noise_rate_log_sigma, model.noise_rate_log_sigma);
-    noise_rate_cumulative.resize(pixel_count);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < pixel_count; ++i) {
-      const double spread = model.noise_rate_log_sigma > 0.0 ? std::exp(log_rate(rate_rng)) : 1.0;
-      const bool hot = uniform(rate_rng) < model.hot_pixel_fraction;
-      sum += hot ? model.hot_pixel_rate_hz : model.noise_rate_hz_per_pixel * spread;
-      noise_rate_cumulative[i] = sum;
-    }
-    noise_rate_total = sum;
-  }
-  std::exponential_distribution<double> noise_gap(noise_rate_total > 0.0 ? noise_rate_total : 1.0);
-  std::uniform_int_distribution<std::size_t> noise_pixel(0, pixel_count - 1);
-  const auto drawNoisePixel = [&]() -> std::size_t {
-    if (noise_rate_cumulative.empty()) return noise_pixel(noise_rng);
-    const double u = uniform(noise_rng) * noise_rate_total;
-    const auto it = std::upper_bound(noise_rate_cumulative.begin(), noise_rate_cumulative.end(), u);
-    return std::min<std::size_t>(pixel_count - 1,
-                                 static_cast<std::size_t>(it - noise_rate_cumulative.begin()));
-  };
-  double next_noise_s = noise_rate_total > 0.0 ? t_begin_s + noise_gap(noise_rng) : kInfinity;
-
-  const double base_step_s = 1.0 / config_.render_rate_hz;
   const double gt_step_s = 1.0 / config_.ground_truth_rate_hz;
   std::size_t gt_index = 0;
   // Ground truth at t_begin + k / ground_truth_rate_hz up to `up_to_s`.
@@ -537,132 +750,16 @@ SimulationResult EventSimulator::simulateLabelled(const Scene& scene,
     }
   };
   emitGroundTruth(t_begin_s);
-
-  // Probe rays for the step-size control: the sensor corners and centre.
-  std::vector<Eigen::Vector2d> probe_pixels = {{0.0, 0.0},
-                                               {width - 1.0, 0.0},
-                                               {0.0, camera.height - 1.0},
-                                               {width - 1.0, camera.height - 1.0},
-                                               camera.principal_point};
-  std::vector<Eigen::Vector3d> probe_rays;
-  for (const Eigen::Vector2d& pixel : probe_pixels) {
-    if (std::optional<Eigen::Vector3d> ray = camera.backprojectRay(pixel)) {
-      probe_rays.push_back(*ray);
-    }
-  }
-
-  EventVector step_events;
-  std::vector<std::uint8_t> step_labels;
-  // Events with their labels, sorted together; the order is the one std::sort gives the events
-  // alone (same comparisons on the same sequence).
-  struct LabelledEvent {
-    Event event;
-    std::uint8_t noise;
-  };
-  std::vector<LabelledEvent> step_sorted;
-  double t0 = t_begin_s;
-  while (t0 < t_end_s) {
-    double t1 = std::min(t0 + base_step_s, t_end_s);
-    Eigen::Isometry3d next_pose = toIsometry(interpolatePose(camera_trajectory, t1));
-    // Largest image motion of a probe point between the two poses [pixels].
-    double motion_px = 0.0;
-    for (std::size_t k = 0; k < probe_rays.size(); ++k) {
-      const std::optional<Eigen::Vector3d> world = renderer.hitPoint(pose, probe_rays[k]);
-      const Eigen::Vector2d start =
-          camera.distort(camera.principal_point + camera.focal_px * probe_rays[k].head<2>());
-      if (!world) {
-        // No plane: fall back to the rotation alone (points at infinity).
-        const Eigen::Vector3d direction =
-            next_pose.linear().transpose() * (pose.linear() * probe_rays[k]);
-        if (const std::optional<Eigen::Vector2d> end = camera.project(direction)) {
-          motion_px = std::max(motion_px, (*end - start).norm());
-        }
-        continue;
-      }
-      const Eigen::Vector3d in_next = next_pose.inverse() * *world;
-      if (const std::optional<Eigen::Vector2d> end = camera.project(in_next)) {
-        motion_px = std::max(motion_px, (*end - start).norm());
-      } else {
-        motion_px = kInfinity;
-      }
-    }
-    if (motion_px > config_.max_step_motion_px) {
-      const double subdivisions =
-          std::isfinite(motion_px) ? std::ceil(motion_px / config_.max_step_motion_px) : 64.0;
-      t1 = t0 + (t1 - t0) / std::min(subdivisions, 1e4);
-      next_pose = toIsometry(interpolatePose(camera_trajectory, t1));
-    }
-
-    renderer.render(next_pose, intensity);
-    ++result.render_steps;
-    step_events.clear();
-    const double dt = t1 - t0;
-    for (std::size_t i = 0; i < pixel_count; ++i) {
-      const float l0 = log_previous[i];
-      const float l1 = std::log(intensity[i] + epsilon);
-      log_current[i] = l1;
-      float ref = reference[i];
-      const float c_on = threshold_on[i];
-      const float c_off = threshold_off[i];
-      if (l1 - ref < c_on && ref - l1 < c_off) continue;
-      const float change = l1 - l0;
-      const bool on = l1 > ref;
-      const float c = on ? c_on : c_off;
-      const float direction = on ? 1.0f : -1.0f;
-      // Each crossed level ref +- k c gives one event at the linearly interpolated time.
-      while (on ? (l1 - ref >= c) : (ref - l1 >= c)) {
-        ref += direction * c;
-        double fraction = change != 0.0f ? static_cast<double>(ref - l0) / change : 1.0;
-        fraction = std::clamp(fraction, 0.0, 1.0);
-        const double t_event = t0 + fraction * dt;
-        if (t_event - last_event_s[i] >= refractory_s) {
-          last_event_s[i] = t_event;
-          Event event;
-          event.t_us = std::llround(t_event * 1e6);
-          event.x = static_cast<std::uint16_t>(i % width);
-          event.y = static_cast<std::uint16_t>(i / width);
-          event.polarity = on;
-          step_events.push_back(event);
-        }
-      }
-      reference[i] = ref;
-    }
-    result.signal_events += step_events.size();
-    const std::size_t step_signal = step_events.size();
-    while (next_noise_s < t1) {
-      const std::size_t i = drawNoisePixel();
-      Event event;
-      event.t_us = std::llround(next_noise_s * 1e6);
-      event.x = static_cast<std::uint16_t>(i % width);
-      event.y = static_cast<std::uint16_t>(i / width);
-      event.polarity = uniform(noise_rng) < 0.5;
-      step_events.push_back(event);
-      ++result.noise_events;
-      next_noise_s += noise_gap(noise_rng);
-    }
-    step_sorted.resize(step_events.size());
-    for (std::size_t k = 0; k < step_events.size(); ++k) {
-      step_sorted[k] = {step_events[k], static_cast<std::uint8_t>(k >= step_signal)};
-    }
-    std::sort(step_sorted.begin(), step_sorted.end(),
-              [](const LabelledEvent& la, const LabelledEvent& lb) {
-                const Event& a = la.event;
-                const Event& b = lb.event;
-                if (a.t_us != b.t_us) return a.t_us < b.t_us;
-                if (a.y != b.y) return a.y < b.y;
-                return a.x < b.x;
-              });
-    step_labels.resize(step_sorted.size());
-    for (std::size_t k = 0; k < step_sorted.size(); ++k) {
-      step_events[k] = step_sorted[k].event;
-      step_labels[k] = step_sorted[k].noise;
-    }
-    if (!step_events.empty()) sink(step_events, step_labels);
-    log_previous.swap(log_current);
-    pose = next_pose;
-    t0 = t1;
-    emitGroundTruth(t0);
-  }
+  stream.advance(
+      t_end_s,
+      [&camera_trajectory](double t) { return toIsometry(interpolatePose(camera_trajectory, t)); },
+      [&](const EventVector& events, const std::vector<std::uint8_t>& is_noise, double t1) {
+        if (!events.empty()) sink(events, is_noise);
+        emitGroundTruth(t1);
+      });
+  result.signal_events = stream.signalEvents();
+  result.noise_events = stream.noiseEvents();
+  result.render_steps = stream.renderSteps();
   if (result.ground_truth.empty() || result.ground_truth.back().t_s < t_end_s) {
     result.ground_truth.push_back(interpolatePose(camera_trajectory, t_end_s));
   }

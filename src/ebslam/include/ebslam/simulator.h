@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -141,6 +142,53 @@ struct SimulationResult {
   std::size_t signal_events = 0;  ///< events from intensity changes
   std::size_t noise_events = 0;   ///< background noise events
   std::size_t render_steps = 0;   ///< number of rendered images
+};
+
+/// The simulator's state between render steps (reference levels, thresholds, refractory times,
+/// noise process, prepared textures), so that the camera can be moved step by step, e.g. by a
+/// robot controller in closed loop, instead of along a trajectory known in advance.
+/// EventSimulator::simulate runs one stream over the whole trajectory; a stream moved in pieces
+/// gives the same events as one moved in one piece whenever the pieces' ends fall on its render
+/// steps. Not thread-safe; movable.
+class EventStream {
+ public:
+  /// Camera pose (camera -> world) at time t_s [s].
+  using PoseAt = std::function<Eigen::Isometry3d(double t_s)>;
+  /// Receives the events of one render step (sorted by time, possibly empty), their noise labels
+  /// (1 = background noise event) and the step's end time [s]; called once per render step in
+  /// time order.
+  using StepSink = std::function<void(const EventVector& events,
+                                      const std::vector<std::uint8_t>& is_noise, double t_end_s)>;
+
+  /// Renders the first image at `start_pose` (camera -> world) at time t_s [s]; no events.
+  /// Throws std::invalid_argument for an invalid config or scene or a non-finite pose or time.
+  EventStream(const SimulatorConfig& config, const Scene& scene,
+              const Eigen::Isometry3d& start_pose, double t_s);
+  ~EventStream();
+  EventStream(EventStream&&) noexcept;
+  EventStream& operator=(EventStream&&) noexcept;
+
+  /// Moves the camera along pose_at from time() to t_end_s, rendering at least at
+  /// config.render_rate_hz and finer while the image moves more than max_step_motion_px.
+  /// pose_at(time()) should equal pose(). Throws std::invalid_argument if t_end_s is not after
+  /// time() or not finite, or pose_at returns a non-finite pose (the stream is then unchanged up
+  /// to the failing step).
+  void advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink);
+  /// advance() with the camera moving from pose() to `pose` at constant velocity (linear
+  /// position, slerp orientation) over [time(), t_end_s]; appends the events to `events` and,
+  /// if given, their noise labels to `noise_labels`.
+  void moveTo(const Eigen::Isometry3d& pose, double t_end_s, EventVector& events,
+              std::vector<std::uint8_t>* noise_labels = nullptr);
+
+  double time() const;
+  const Eigen::Isometry3d& pose() const;
+  std::size_t signalEvents() const;
+  std::size_t noiseEvents() const;
+  std::size_t renderSteps() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 /// Simulates an event camera moving along a trajectory through a scene.
