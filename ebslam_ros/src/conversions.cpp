@@ -6,17 +6,25 @@
 
 namespace ebslam_ros {
 
-ros::Time toRosTime(std::int64_t t_us, const TimeAnchor& anchor) {
+std::optional<ros::Time> rosTimeOf(std::int64_t t_us, const TimeAnchor& anchor) {
   if (!(anchor.speed > 0.0)) throw std::invalid_argument("time anchor speed must be positive");
-  const double offset_s = static_cast<double>(t_us - anchor.t_us) * 1e-6 / anchor.speed;
+  std::int64_t offset_us = 0;
+  if (__builtin_sub_overflow(t_us, anchor.t_us, &offset_us)) return std::nullopt;
+  const double offset_s = static_cast<double>(offset_us) * 1e-6 / anchor.speed;
   const double seconds = anchor.ros_time.toSec() + offset_s;
-  if (seconds < 0.0 || seconds > 4294967295.0) {
-    throw std::invalid_argument("event time " + std::to_string(t_us) +
-                                " us maps outside the range of ros::Time");
-  }
+  if (!(seconds >= 0.0 && seconds <= 4294967295.0)) return std::nullopt;
   // Integer nanoseconds keep microsecond resolution exact at large absolute times.
   const std::int64_t offset_ns = std::llround(offset_s * 1e9);
   return ros::Time().fromNSec(anchor.ros_time.toNSec() + offset_ns);
+}
+
+ros::Time toRosTime(std::int64_t t_us, const TimeAnchor& anchor) {
+  const std::optional<ros::Time> time = rosTimeOf(t_us, anchor);
+  if (!time) {
+    throw std::invalid_argument("event time " + std::to_string(t_us) +
+                                " us maps outside the range of ros::Time");
+  }
+  return *time;
 }
 
 std::int64_t toStreamTime(const ros::Time& stamp, const TimeAnchor& anchor) {

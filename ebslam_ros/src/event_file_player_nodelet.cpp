@@ -5,13 +5,21 @@
 // (t_us - first t_us) / ~speed; header.stamp = ts of the last event; header.frame_id = ~frame_id.
 // A damaged file is played up to the damage and the damage is logged. Timestamps that run
 // backwards in the file are published in file order (counted and reported at the end).
+// Damaged times are reported (throttled error) and never stop playback: a step of the file's
+// clock longer than ~max_gap (either way) is a gap in the recording if the next event follows on
+// from it (playback goes on at once, the stamps shifted to close the gap: a warning), and a
+// damaged line otherwise (that event is dropped); an event whose time falls outside ros::Time is
+// dropped. Counts of both are reported at the end of the file.
 // With ~wait_for_subscribers playback starts 0.5 s after the first subscriber has connected.
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
 #include <ebslam/event_io.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 
@@ -30,8 +38,9 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
       config_ = loadEventFilePlayerConfig(getPrivateNodeHandle());
       openFile();
     } catch (const std::exception& error) {
-      NODELET_ERROR("event file player not started: %s", error.what());
-      return;
+      // As the eDVS driver: the nodelet does not load (a node exits), the reason names the cause.
+      NODELET_FATAL("event file player not started: %s", error.what());
+      throw;
     }
     publisher_ = getNodeHandle().advertise<ebslam_msgs::EventArray>("events", 100);
     NODELET_INFO("playing '%s' (%s) at %.2fx speed%s", config_.file.c_str(),
@@ -50,13 +59,20 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
     pending_.clear();
     pending_index_ = 0;
     anchored_ = false;
+    file_index_ = 0;
+    held_.reset();
+    last_t_us_.reset();
+    last_stamp_ = ros::Time();
+    dropped_ = 0;
+    gaps_skipped_ = 0;
   }
 
   // Publishes every event whose playback time is at or before now.
   void publishDue(const ros::WallTimerEvent&) {
     if (!anchored_ && config_.wait_for_subscribers && !subscriberSettled()) return;
     const ros::Time now = ros::Time::now();
-    ebslam::EventVector due;
+    // Stamped as each event is accepted: a skipped gap moves the anchor within a batch.
+    ebslam_msgs::EventArray msg;
     while (true) {
       if (pending_index_ == pending_.size()) {
         pending_index_ = 0;
@@ -67,17 +83,93 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
         anchor_ = TimeAnchor{now, event.t_us, config_.speed};
         anchored_ = true;
       }
-      if (toRosTime(event.t_us, anchor_) > now) break;
-      due.push_back(event);
+      if (held_) {
+        if (std::abs(stepSeconds(held_->event.t_us, event.t_us)) <= config_.max_gap_s) {
+          skipGapTo(*held_, now);
+          msg.events.push_back(eventMsg(held_->event, last_stamp_));
+        } else {
+          drop(*held_, "steps away from both its neighbours");
+        }
+        held_.reset();
+      }
+      if (last_t_us_ && std::abs(stepSeconds(*last_t_us_, event.t_us)) > config_.max_gap_s) {
+        // A gap in the recording or one damaged line: the next event tells.
+        held_ = Held{event, file_index_++};
+        ++pending_index_;
+        continue;
+      }
+      const std::optional<ros::Time> stamp = rosTimeOf(event.t_us, anchor_);
+      if (!stamp) {
+        drop(Held{event, file_index_++}, "maps outside the range of ros::Time");
+        ++pending_index_;
+        continue;
+      }
+      if (*stamp > now) break;
+      msg.events.push_back(eventMsg(event, *stamp));
+      last_t_us_ = event.t_us;
+      last_stamp_ = *stamp;
+      ++file_index_;
       ++pending_index_;
     }
-    if (!due.empty()) {
-      ebslam_msgs::EventArray msg =
-          toEventArrayMsg(due, reader_->sensor(), config_.frame_id, anchor_);
+    if (!msg.events.empty()) {
+      msg.header.frame_id = config_.frame_id;
+      msg.header.stamp = msg.events.back().ts;
       msg.header.seq = sequence_++;
+      msg.width = reader_->sensor().width;
+      msg.height = reader_->sensor().height;
       publisher_.publish(msg);
     }
-    if (pending_index_ == pending_.size() && reader_->done()) finish();
+    if (pending_index_ == pending_.size() && reader_->done()) {
+      if (held_) drop(*held_, "is the last one and nothing follows on from it");
+      held_.reset();
+      finish();
+    }
+  }
+
+  // An event after a step longer than ~max_gap, and its index in the file (from 0).
+  struct Held {
+    ebslam::Event event;
+    std::size_t index = 0;
+  };
+
+  static ebslam_msgs::Event eventMsg(const ebslam::Event& event, const ros::Time& stamp) {
+    ebslam_msgs::Event msg;
+    msg.x = event.x;
+    msg.y = event.y;
+    msg.ts = stamp;
+    msg.polarity = event.polarity;
+    return msg;
+  }
+
+  // Step of the file's clock from a to b [s of stream time] (no integer overflow).
+  static double stepSeconds(std::int64_t a, std::int64_t b) {
+    return (static_cast<double>(b) - static_cast<double>(a)) * 1e-6;
+  }
+
+  // Plays `held` at once, right after the last published event: the anchor moves so that the
+  // gap in the file's clock before it takes no wall time (later stamps shift by the same).
+  void skipGapTo(const Held& held, const ros::Time& now) {
+    const double gap_s = last_t_us_ ? stepSeconds(*last_t_us_, held.event.t_us) : 0.0;
+    anchor_ = TimeAnchor{std::max(now, last_stamp_), held.event.t_us, config_.speed};
+    last_t_us_ = held.event.t_us;
+    last_stamp_ = anchor_.ros_time;
+    ++gaps_skipped_;
+    NODELET_WARN_THROTTLE(1.0,
+                          "'%s': the file's clock steps by %.6f s before event %zu (t = %ld us): "
+                          "a gap in the recording longer than ~max_gap = %.3f s, played without "
+                          "waiting (stamps shifted; %zu gaps so far)",
+                          config_.file.c_str(), gap_s, held.index,
+                          static_cast<long>(held.event.t_us), config_.max_gap_s, gaps_skipped_);
+  }
+
+  void drop(const Held& held, const char* why) {
+    ++dropped_;
+    NODELET_ERROR_THROTTLE(1.0,
+                           "'%s' is damaged: dropped event %zu (t = %ld us, x = %u, y = %u), whose "
+                           "time %s (%zu dropped so far)",
+                           config_.file.c_str(), held.index, static_cast<long>(held.event.t_us),
+                           static_cast<unsigned>(held.event.x), static_cast<unsigned>(held.event.y),
+                           why, dropped_);
   }
 
   // roscpp counts a subscriber before its side of the connection is ready, and messages sent in
@@ -97,11 +189,20 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
       NODELET_ERROR("event file '%s' is damaged, played the %zu events before the damage: %s",
                     config_.file.c_str(), reader_->eventsRead(), reader_->error()->c_str());
     }
+    if (dropped_ > 0) {
+      NODELET_ERROR("'%s': dropped %zu events whose times are damaged", config_.file.c_str(),
+                    dropped_);
+    }
+    if (gaps_skipped_ > 0) {
+      NODELET_WARN("'%s': skipped %zu gaps longer than ~max_gap = %.3f s", config_.file.c_str(),
+                   gaps_skipped_, config_.max_gap_s);
+    }
     if (reader_->nonMonotonicCount() > 0) {
       NODELET_WARN("%zu events in '%s' run backwards in time", reader_->nonMonotonicCount(),
                    config_.file.c_str());
     }
-    NODELET_INFO("played %zu events from '%s'", reader_->eventsRead(), config_.file.c_str());
+    NODELET_INFO("played %zu events from '%s'", reader_->eventsRead() - dropped_,
+                 config_.file.c_str());
     if (!config_.loop) {
       timer_.stop();
       return;
@@ -120,6 +221,12 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
   std::size_t pending_index_ = 0;
   bool anchored_ = false;
   TimeAnchor anchor_;
+  std::size_t file_index_ = 0;             // index in the file of pending_[pending_index_]
+  std::optional<Held> held_;               // the event after a long step, until the next one
+  std::optional<std::int64_t> last_t_us_;  // file time of the last published event [us]
+  ros::Time last_stamp_;                   // its stamp
+  std::size_t dropped_ = 0;                // events with damaged times
+  std::size_t gaps_skipped_ = 0;
   std::uint32_t sequence_ = 0;
   ros::WallTime subscriber_seen_;
   ros::Publisher publisher_;

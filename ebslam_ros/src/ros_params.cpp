@@ -32,6 +32,7 @@ EventFilePlayerConfig loadEventFilePlayerConfig(const ros::NodeHandle& nh) {
   config.publish_rate_hz = param<double>(nh, "publish_rate", config.publish_rate_hz);
   config.speed = param<double>(nh, "speed", config.speed);
   config.loop = param<bool>(nh, "loop", config.loop);
+  config.max_gap_s = param<double>(nh, "max_gap", config.max_gap_s);
   config.wait_for_subscribers =
       param<bool>(nh, "wait_for_subscribers", config.wait_for_subscribers);
 
@@ -59,6 +60,7 @@ EventFilePlayerConfig loadEventFilePlayerConfig(const ros::NodeHandle& nh) {
   }
   requirePositive(config.publish_rate_hz, nh, "publish_rate");
   requirePositive(config.speed, nh, "speed");
+  requirePositive(config.max_gap_s, nh, "max_gap");
   return config;
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace {
@@ -40,6 +41,20 @@ TEST(Conversions, TimeAnchorMapsStreamTime) {
   EXPECT_THROW(ebslam_ros::toRosTime(-200'000'000, anchor), std::invalid_argument);
   EXPECT_THROW(ebslam_ros::toRosTime(0, TimeAnchor{ros::Time(1, 0), 0, 0.0}),
                std::invalid_argument);
+}
+
+TEST(Conversions, TimeOutsideRosTimeIsNoTime) {
+  const TimeAnchor anchor{ros::Time(1700000000, 0), 1'000'000, 10.0};
+  EXPECT_EQ(ebslam_ros::rosTimeOf(2'000'000, anchor), ros::Time(1700000000, 100000000));
+  // Lines of a damaged text file: before 1970 (at 1x), beyond 2106 at 10x, and the int64 extremes
+  // (whose difference to the anchor does not fit in 64 bits).
+  EXPECT_FALSE(ebslam_ros::rosTimeOf(-9'000'000'000'000'000,
+                                     TimeAnchor{ros::Time(1700000000, 0), 1'000'000, 1.0}));
+  EXPECT_FALSE(ebslam_ros::rosTimeOf(90'000'000'000'000'000, anchor));
+  EXPECT_FALSE(ebslam_ros::rosTimeOf(std::numeric_limits<std::int64_t>::min(), anchor));
+  EXPECT_FALSE(ebslam_ros::rosTimeOf(std::numeric_limits<std::int64_t>::max(),
+                                     TimeAnchor{ros::Time(10, 0), -1'000'000, 1.0}));
+  EXPECT_THROW(ebslam_ros::toRosTime(90'000'000'000'000'000, anchor), std::invalid_argument);
 }
 
 TEST(Conversions, EventOutsideSensorIsRejected) {

@@ -8,6 +8,8 @@
 #include <ebslam_msgs/EventArray.h>
 #include <ros/time.h>
 
+#include <optional>
+
 namespace ebslam_ros {
 
 struct TimeAnchor {
@@ -16,6 +18,9 @@ struct TimeAnchor {
   double speed = 1.0;     ///< playback speed factor (> 0)
 };
 
+/// The ROS time of stream time t_us, or nullopt when it would be negative or beyond ros::Time
+/// (e.g. a damaged timestamp in a file). Throws std::invalid_argument for speed <= 0.
+std::optional<ros::Time> rosTimeOf(std::int64_t t_us, const TimeAnchor& anchor);
 /// Throws std::invalid_argument when the resulting time would be negative or beyond ros::Time.
 ros::Time toRosTime(std::int64_t t_us, const TimeAnchor& anchor);
 /// Inverse of toRosTime, rounded to the nearest microsecond.

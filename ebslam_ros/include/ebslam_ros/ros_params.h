@@ -21,6 +21,9 @@ struct EventFilePlayerConfig {
   double publish_rate_hz = 100.0;  ///< ~publish_rate: EventArray messages per second [Hz]
   double speed = 1.0;              ///< ~speed: playback speed factor (2 = twice real time)
   bool loop = false;               ///< ~loop: start again at the end of the file
+  /// ~max_gap: longest step of the file's clock between two events that is played as it is [s of
+  /// stream time]; a longer one is a gap to skip when the next event confirms it, else damage
+  double max_gap_s = 10.0;
   bool wait_for_subscribers =
       false;  ///< ~wait_for_subscribers: start playing on the first subscriber
 };
