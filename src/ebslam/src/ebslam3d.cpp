@@ -1,0 +1,380 @@
+#include "ebslam/ebslam3d.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ebslam {
+
+Ebslam3dConfig Ebslam3dConfig::fast() {
+  Ebslam3dConfig c;
+  c.num_particles = 25;
+  c.batch_size = 5;
+  c.event_share = 0.25;
+  return c;
+}
+
+void Ebslam3dConfig::validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("Ebslam3dConfig: " + what);
+  };
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (num_particles < 1 || num_particles > 100000) fail("num_particles must be in [1, 100000]");
+  if (batch_size < 1 || batch_size > 64) fail("batch_size must be in [1, 64]");
+  if (resample_every < 1) fail("resample_every must be at least 1");
+  if (!(event_share > 0.0 && event_share <= 1.0)) fail("event_share must be in (0, 1]");
+  if (!(sigma_position_m >= 0.0) || !std::isfinite(sigma_position_m)) {
+    fail("sigma_position_m must be finite and >= 0");
+  }
+  if (!(sigma_rotation_rad >= 0.0 && sigma_rotation_rad < 1.0)) {
+    fail("sigma_rotation_rad must be in [0, 1)");
+  }
+  if (!(score_alpha > 0.0 && score_alpha <= 1.0)) fail("score_alpha must be in (0, 1]");
+  if (!positive(voxel_size_m)) fail("voxel_size_m must be positive");
+  if (!positive(splat_lambda)) fail("splat_lambda must be positive");
+  if (!positive(focal_px)) fail("focal_px must be positive");
+  if (!(min_range_m >= 0.0) || !positive(max_range_m) || !(min_range_m < max_range_m)) {
+    fail("need 0 <= min_range_m < max_range_m (finite)");
+  }
+  VoxelMapConfig map;
+  map.voxel_size_m = voxel_size_m;
+  map.max_memory_bytes = max_map_bytes;
+  try {
+    map.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("map: ") + e.what());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ParticleSet3D
+
+void ParticleSet3D::reset(int n, const Pose3& start, std::uint64_t seed) {
+  if (n < 1) throw std::invalid_argument("ParticleSet3D: need at least one particle");
+  const auto count = static_cast<std::size_t>(n);
+  const Eigen::Quaterniond q = start.orientation.normalized();
+  x_.assign(count, static_cast<float>(start.position.x()));
+  y_.assign(count, static_cast<float>(start.position.y()));
+  z_.assign(count, static_cast<float>(start.position.z()));
+  qw_.assign(count, static_cast<float>(q.w()));
+  qx_.assign(count, static_cast<float>(q.x()));
+  qy_.assign(count, static_cast<float>(q.y()));
+  qz_.assign(count, static_cast<float>(q.z()));
+  scores_.assign(count, 1.0);  // alg. 9: s_i = 1
+  rng_ = FastNormalGenerator(seed);
+  scratch_.resize(count * 20);  // see step()
+  scratch_w_.resize(count);
+}
+
+Pose3 ParticleSet3D::particle(int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  Pose3 p;
+  p.position = Eigen::Vector3d(x_[k], y_[k], z_[k]);
+  p.orientation = Eigen::Quaterniond(qw_[k], qx_[k], qy_[k], qz_[k]).normalized();
+  return p;
+}
+
+double ParticleSet3D::normalisedWeight(int i) const {
+  double total = 0.0;
+  for (double s : scores_.stored()) total += s;
+  if (!(total > 0.0) || !std::isfinite(total)) return 1.0 / size();
+  return scores_.stored()[static_cast<std::size_t>(i)] / total;
+}
+
+Pose3 ParticleSet3D::weightedMean() const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double s : w) total += s;
+  const bool uniform = !(total > 0.0) || !std::isfinite(total);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector4d q = Eigen::Vector4d::Zero();
+  const Eigen::Vector4d ref(qw_[0], qx_[0], qy_[0], qz_[0]);
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = uniform ? 1.0 : w[i];
+    p += wi * Eigen::Vector3d(x_[i], y_[i], z_[i]);
+    Eigen::Vector4d qi(qw_[i], qx_[i], qy_[i], qz_[i]);
+    if (qi.dot(ref) < 0.0) qi = -qi;
+    q += wi * qi;
+  }
+  const double sum = uniform ? static_cast<double>(x_.size()) : total;
+  Pose3 mean;
+  mean.position = p / sum;
+  if (q.norm() > 1e-12) {
+    q.normalize();
+    mean.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+  } else {
+    mean.orientation = Eigen::Quaterniond(ref[0], ref[1], ref[2], ref[3]).normalized();
+  }
+  return mean;
+}
+
+Eigen::Matrix<double, 6, 6> ParticleSet3D::covariance(const Pose3& mean) const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double s : w) total += s;
+  const bool uniform = !(total > 0.0) || !std::isfinite(total);
+  const Eigen::Quaterniond inv_mean = mean.orientation.conjugate();
+  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = (uniform ? 1.0 : w[i]) / (uniform ? static_cast<double>(x_.size()) : total);
+    Eigen::Quaterniond d = inv_mean * Eigen::Quaterniond(qw_[i], qx_[i], qy_[i], qz_[i]);
+    if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+    Eigen::Matrix<double, 6, 1> v;
+    v << x_[i] - mean.position.x(), y_[i] - mean.position.y(), z_[i] - mean.position.z(),
+        2.0 * d.x(), 2.0 * d.y(), 2.0 * d.z();
+    c += wi * v * v.transpose();
+  }
+  return c;
+}
+
+void ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
+                         float sigma_position, float sigma_rotation, const BatchDecay& decay) {
+  const std::size_t n = x_.size();
+  // Scratch, structure of arrays of n floats each: 7 normals, 9 rotation entries, 3 voxel
+  // coordinates (as int32), the score sums.
+  float* g[7];
+  for (int k = 0; k < 7; ++k) g[k] = scratch_.data() + k * n;
+  float* rot[9];
+  for (int k = 0; k < 9; ++k) rot[k] = scratch_.data() + (7 + k) * n;
+  auto* ix = reinterpret_cast<std::int32_t*>(scratch_.data() + 16 * n);
+  std::int32_t* iy = ix + n;
+  std::int32_t* iz = iy + n;
+  float* sums = scratch_.data() + 19 * n;
+  for (std::size_t i = 0; i < n; ++i) {
+    float v[8];
+    rng_.normals4(v);
+    rng_.normals4(v + 4);
+    for (int k = 0; k < 7; ++k) g[k][i] = v[k];
+  }
+  float* qw = qw_.data();
+  float* qxs = qx_.data();
+  float* qys = qy_.data();
+  float* qzs = qz_.data();
+  float* xs = x_.data();
+  float* ys = y_.data();
+  float* zs = z_.data();
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    xs[i] += sigma_position * g[0][i];  // eq. 8.11
+    ys[i] += sigma_position * g[1][i];
+    zs[i] += sigma_position * g[2][i];
+    // Uniform axis (eq. 8.13), normal angle, small-angle quaternion (eq. 8.15), applied in the
+    // sensor frame (q <- q dq) and renormalised. The normal table holds no zero, so the axis
+    // draw never vanishes; the floor only guards the division.
+    const float axis_norm2 = g[3][i] * g[3][i] + g[4][i] * g[4][i] + g[5][i] * g[5][i];
+    const float theta = sigma_rotation * g[6][i];
+    const float s = 0.5f * theta / std::sqrt(std::max(axis_norm2, 1e-12f));
+    const float dw = 1.0f - 0.25f * theta * theta;
+    const float dx = s * g[3][i], dy = s * g[4][i], dz = s * g[5][i];
+    const float w = qw[i], qx = qxs[i], qy = qys[i], qz = qzs[i];
+    const float nw = w * dw - qx * dx - qy * dy - qz * dz;
+    const float nx = w * dx + qx * dw + qy * dz - qz * dy;
+    const float ny = w * dy - qx * dz + qy * dw + qz * dx;
+    const float nz = w * dz + qx * dy - qy * dx + qz * dw;
+    const float inv = 1.0f / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
+    const float a = nw * inv, b = nx * inv, c = ny * inv, d = nz * inv;
+    qw[i] = a;
+    qxs[i] = b;
+    qys[i] = c;
+    qzs[i] = d;
+    rot[0][i] = 1.0f - 2.0f * (c * c + d * d);
+    rot[1][i] = 2.0f * (b * c - d * a);
+    rot[2][i] = 2.0f * (b * d + c * a);
+    rot[3][i] = 2.0f * (b * c + d * a);
+    rot[4][i] = 1.0f - 2.0f * (b * b + d * d);
+    rot[5][i] = 2.0f * (c * d - b * a);
+    rot[6][i] = 2.0f * (b * d - c * a);
+    rot[7][i] = 2.0f * (c * d + b * a);
+    rot[8][i] = 1.0f - 2.0f * (b * b + c * c);
+  }
+  // Event-major order: the particles' views of one event lie close together, so the map finds
+  // their chunk once (ChunkedVoxelMap::accumulateVoxels).
+  std::fill(sums, sums + n, 0.0f);
+  const float inv_voxel = static_cast<float>(1.0 / map.voxelSize());
+  constexpr float kLimit = static_cast<float>(ChunkedVoxelMap::kMaxVoxelCoordinate);
+  for (int j = 0; j < batch; ++j) {
+    const float ex = points[j].x() * inv_voxel, ey = points[j].y() * inv_voxel,
+                ez = points[j].z() * inv_voxel;
+    float max_abs = 0.0f;
+#pragma omp simd reduction(max : max_abs)
+    for (std::size_t i = 0; i < n; ++i) {
+      // Map point in voxel units, clamped so that the conversion to int is defined; the clamp
+      // is detected through max_abs.
+      float fx = rot[0][i] * ex + rot[1][i] * ey + rot[2][i] * ez + xs[i] * inv_voxel;
+      float fy = rot[3][i] * ex + rot[4][i] * ey + rot[5][i] * ez + ys[i] * inv_voxel;
+      float fz = rot[6][i] * ex + rot[7][i] * ey + rot[8][i] * ez + zs[i] * inv_voxel;
+      max_abs = std::max(max_abs, std::max(std::abs(fx), std::max(std::abs(fy), std::abs(fz))));
+      fx = std::min(kLimit, std::max(-kLimit, fx));
+      fy = std::min(kLimit, std::max(-kLimit, fy));
+      fz = std::min(kLimit, std::max(-kLimit, fz));
+      const auto tx = static_cast<std::int32_t>(fx);
+      const auto ty = static_cast<std::int32_t>(fy);
+      const auto tz = static_cast<std::int32_t>(fz);
+      ix[i] = tx - (static_cast<float>(tx) > fx ? 1 : 0);  // floor
+      iy[i] = ty - (static_cast<float>(ty) > fy ? 1 : 0);
+      iz[i] = tz - (static_cast<float>(tz) > fz ? 1 : 0);
+    }
+    if (max_abs < kLimit) {
+      map.accumulateVoxels(ix, iy, iz, static_cast<int>(n), sums);
+    }  // else: a particle far outside the map's range; its view of this event scores nothing
+  }
+  const double factor = scores_.beginUpdate(decay);
+  std::vector<double>& stored = scores_.stored();
+  for (std::size_t i = 0; i < n; ++i) stored[i] += factor * static_cast<double>(sums[i]);
+}
+
+bool ParticleSet3D::resampleSystematic() {
+  std::vector<double>& w = scores_.stored();
+  const std::size_t n = w.size();
+  double total = 0.0;
+  for (double s : w) total += s;
+  if (!(total > 0.0) || !std::isfinite(total)) return false;
+  std::vector<float>* arrays[] = {&x_, &y_, &z_, &qw_, &qx_, &qy_, &qz_};
+  std::vector<float> old(7 * n);
+  for (std::size_t a = 0; a < 7; ++a) std::copy(arrays[a]->begin(), arrays[a]->end(), &old[a * n]);
+  const std::vector<double> old_w = w;
+  const double step = total / static_cast<double>(n);
+  double u = rng_.uniform() * step;
+  double cumulative = old_w[0];
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    while (u > cumulative && k + 1 < n) cumulative += old_w[++k];
+    for (std::size_t a = 0; a < 7; ++a) (*arrays[a])[j] = old[a * n + k];
+    w[j] = old_w[k];
+    u += step;
+  }
+  // Keep the quaternions on one hemisphere of the first, so that means need no per-call flip.
+  for (std::size_t j = 0; j < n; ++j) {
+    if (qw_[j] * qw_[0] + qx_[j] * qx_[0] + qy_[j] * qy_[0] + qz_[j] * qz_[0] < 0.0f) {
+      qw_[j] = -qw_[j];
+      qx_[j] = -qx_[j];
+      qy_[j] = -qy_[j];
+      qz_[j] = -qz_[j];
+    }
+  }
+  scores_.renormalise();
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// EventSlam3d
+
+namespace {
+
+VoxelMapConfig mapConfig(const Ebslam3dConfig& c) {
+  c.validate();
+  VoxelMapConfig m;
+  m.voxel_size_m = c.voxel_size_m;
+  m.max_memory_bytes = c.max_map_bytes;
+  return m;
+}
+
+}  // namespace
+
+EventSlam3d::EventSlam3d(const Ebslam3dConfig& config, const Pose3& start)
+    : config_(config), map_(mapConfig(config)) {
+  for (int b = 1; b <= config_.batch_size; ++b) {
+    batch_decay_.push_back(batchDecay(config_.score_alpha, b));
+  }
+  reset(start);
+}
+
+void EventSlam3d::reset(const Pose3& start) {
+  map_.clear();
+  particles_.reset(config_.num_particles, start, config_.seed);
+  expected_ = start;
+  expected_.orientation.normalize();
+  in_batch_ = 0;
+  share_accumulator_ = 0.0;
+  since_resample_ = 0;
+  last_t_us_ = std::numeric_limits<std::int64_t>::min();
+}
+
+EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::size_t count) {
+  ProcessStats stats;
+  if (count == 0) return stats;
+  std::int64_t t = last_t_us_;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (events[i].t_us < t) {
+      throw std::invalid_argument("EventSlam3d::process: event " + std::to_string(i) +
+                                  " has time " + std::to_string(events[i].t_us) +
+                                  " us, earlier than its predecessor (" + std::to_string(t) +
+                                  " us)");
+    }
+    t = events[i].t_us;
+  }
+  last_t_us_ = t;
+  const float min_r2 = static_cast<float>(config_.min_range_m * config_.min_range_m);
+  const float max_r2 = static_cast<float>(config_.max_range_m * config_.max_range_m);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3f& p = events[i].point;
+    const float r2 = p.squaredNorm();  // NaN for a non-finite point, which fails both tests
+    if (!(r2 >= min_r2 && r2 <= max_r2)) {
+      ++stats.rejected;
+      continue;
+    }
+    share_accumulator_ += config_.event_share;
+    if (share_accumulator_ < 1.0) {
+      ++stats.skipped;
+      continue;
+    }
+    share_accumulator_ -= 1.0;
+    batch_[in_batch_++] = p;
+    ++stats.used;
+    if (in_batch_ == config_.batch_size) runBatch(in_batch_);
+  }
+  if (in_batch_ > 0) runBatch(in_batch_);
+  rejected_ += stats.rejected;
+  return stats;
+}
+
+void EventSlam3d::runBatch(int b) {
+  in_batch_ = 0;
+  const float root_b = std::sqrt(static_cast<float>(b));
+  particles_.step(batch_, b, map_, static_cast<float>(config_.sigma_position_m) * root_b,
+                  static_cast<float>(config_.sigma_rotation_rad) * root_b, batch_decay_[b - 1]);
+  processed_ += static_cast<std::uint64_t>(b);
+  since_resample_ += b;
+  expected_ = particles_.weightedMean();
+  // Mapping (eq. 8.9).
+  if (config_.splat == MapSplat3d::kExpectedPose) {
+    const Eigen::Quaternionf q = expected_.orientation.cast<float>();
+    const Eigen::Vector3f t = expected_.position.cast<float>();
+    for (int j = 0; j < b; ++j) splat(batch_[j], q, t, 1.0f);
+  } else {
+    for (int i = 0; i < particles_.size(); ++i) {
+      const auto w = static_cast<float>(particles_.normalisedWeight(i));
+      if (!(w > 0.0f)) continue;
+      const Pose3 p = particles_.particle(i);
+      const Eigen::Quaternionf q = p.orientation.cast<float>();
+      const Eigen::Vector3f t = p.position.cast<float>();
+      for (int j = 0; j < b; ++j) splat(batch_[j], q, t, w);
+    }
+  }
+  if (since_resample_ >= config_.resample_every) {
+    particles_.resampleSystematic();
+    since_resample_ -= config_.resample_every;
+  }
+}
+
+void EventSlam3d::splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q,
+                        const Eigen::Vector3f& t, float weight) {
+  // eq. 8.10: sigma = D / (2 lambda f), D the event's distance to the camera.
+  const float sigma =
+      point.norm() / static_cast<float>(2.0 * config_.splat_lambda * config_.focal_px);
+  map_.addGaussian(q * point + t, sigma, weight);
+}
+
+std::size_t EventSlam3d::memoryBytes() const {
+  return map_.memoryBytes() + static_cast<std::size_t>(config_.num_particles) *
+                                  (19 * sizeof(float) + 2 * sizeof(double));
+}
+
+std::size_t EventSlam3d::peakMemoryBytes() const {
+  return map_.peakMemoryBytes() + static_cast<std::size_t>(config_.num_particles) *
+                                      (19 * sizeof(float) + 2 * sizeof(double));
+}
+
+}  // namespace ebslam

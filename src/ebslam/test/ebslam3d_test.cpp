@@ -1,0 +1,365 @@
+// EB-SLAM-3D (thesis 8.3): the chunked voxel map against a dense reference, the SE(3) diffusion
+// statistics, tracking on synthetic depth events with a known path, and the documented handling
+// of bad input.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "ebslam/ebslam3d.h"
+#include "ebslam/synthetic_depth_events.h"
+#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/voxel_map.h"
+
+namespace ebslam {
+namespace {
+
+// Dense reference: a plain array over a box of voxels, with the Gaussian splat written out
+// directly from its definition (normalised Gaussian at the voxel centres of the box of radius
+// ceil(2 sigma / v - 0.5) around p's voxel).
+struct DenseGrid {
+  int lo, side;
+  double v;
+  std::vector<double> data;
+  DenseGrid(int lo_, int side_, double v_)
+      : lo(lo_), side(side_), v(v_), data(static_cast<std::size_t>(side_) * side_ * side_, 0.0) {}
+  double& at(int x, int y, int z) {
+    return data[(static_cast<std::size_t>(z - lo) * side + (y - lo)) * side + (x - lo)];
+  }
+  void splat(const Eigen::Vector3f& p, double sigma, double w) {
+    const int cx = static_cast<int>(std::floor(p.x() / v));
+    const int cy = static_cast<int>(std::floor(p.y() / v));
+    const int cz = static_cast<int>(std::floor(p.z() / v));
+    const int r = std::min(3, static_cast<int>(std::ceil(2.0 * sigma / v - 0.5)));
+    if (r <= 0) {
+      at(cx, cy, cz) += w;
+      return;
+    }
+    std::map<std::tuple<int, int, int>, double> g;
+    double total = 0.0;
+    for (int z = cz - r; z <= cz + r; ++z) {
+      for (int y = cy - r; y <= cy + r; ++y) {
+        for (int x = cx - r; x <= cx + r; ++x) {
+          const Eigen::Vector3d c((x + 0.5) * v, (y + 0.5) * v, (z + 0.5) * v);
+          const double e = std::exp(-(c - p.cast<double>()).squaredNorm() / (2 * sigma * sigma));
+          g[{x, y, z}] = e;
+          total += e;
+        }
+      }
+    }
+    for (const auto& [k, e] : g)
+      at(std::get<0>(k), std::get<1>(k), std::get<2>(k)) += w * e / total;
+  }
+};
+
+TEST(ChunkedVoxelMap, MatchesDenseReference) {
+  VoxelMapConfig config;
+  config.voxel_size_m = 0.01;
+  ChunkedVoxelMap map(config);
+  DenseGrid dense(-40, 80, 0.01);  // voxels -40..39 on each axis: chunks on both sides of 0
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> pos(-0.34f, 0.34f);
+  std::uniform_real_distribution<float> sig(0.0f, 0.02f);
+  for (int k = 0; k < 400; ++k) {
+    const Eigen::Vector3f p(pos(rng), pos(rng), pos(rng));
+    const float sigma = k % 2 ? sig(rng) : 0.001f;  // half single-voxel, half spread
+    const float w = 0.5f + static_cast<float>(k % 3);
+    ASSERT_TRUE(map.addGaussian(p, sigma, w));
+    dense.splat(p, sigma, w);
+  }
+  double total = 0.0;
+  for (int z = -40; z < 40; ++z) {
+    for (int y = -40; y < 40; ++y) {
+      for (int x = -40; x < 40; ++x) {
+        const double expected = dense.at(x, y, z);
+        total += expected;
+        ASSERT_NEAR(map.voxelValue(VoxelIndex(x, y, z)), expected, 1e-4 * (1.0 + expected))
+            << x << " " << y << " " << z;
+        const Eigen::Vector3f c = map.voxelCentre(VoxelIndex(x, y, z));
+        ASSERT_EQ(map.value(c), map.voxelValue(VoxelIndex(x, y, z)));
+      }
+    }
+  }
+  double stored = 0.0;
+  map.forEachVoxel(0.0f, [&](const VoxelIndex&, float value) { stored += value; });
+  EXPECT_NEAR(stored, total, 1e-3 * total);  // nothing outside the reference box
+  EXPECT_GE(map.chunkCount(), 8u);           // the box spans chunks -3..2 per axis
+  EXPECT_LE(map.chunkCount(), 216u);
+  EXPECT_EQ(map.evictedChunks(), 0u);
+}
+
+TEST(ChunkedVoxelMap, AccumulateVoxelsMatchesSingleLookups) {
+  ChunkedVoxelMap map;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> coord(-20, 20);
+  for (int k = 0; k < 2000; ++k) {
+    map.add(VoxelIndex(coord(rng), coord(rng), coord(rng)), 1.0f + static_cast<float>(k % 7));
+  }
+  for (int spread : {3, 40}) {  // within one chunk, across chunks
+    std::uniform_int_distribution<int> near(1, spread);
+    std::vector<std::int32_t> ix(100), iy(100), iz(100);
+    std::vector<float> sums(100, 0.5f), expected(100, 0.5f);
+    for (int i = 0; i < 100; ++i) {
+      ix[i] = near(rng) - (spread > 3 ? 20 : 0);
+      iy[i] = near(rng);
+      iz[i] = near(rng);
+      expected[i] += map.voxelValue(VoxelIndex(ix[i], iy[i], iz[i]));
+    }
+    map.accumulateVoxels(ix.data(), iy.data(), iz.data(), 100, sums.data());
+    for (int i = 0; i < 100; ++i) EXPECT_EQ(sums[i], expected[i]) << spread << " " << i;
+  }
+}
+
+TEST(ChunkedVoxelMap, UnboundedExtentAndInvalidPoints) {
+  ChunkedVoxelMap map;
+  const Eigen::Vector3f far(1500.0f, -2300.0f, 700.0f);  // km away, negative coordinates
+  EXPECT_TRUE(map.addGaussian(far, 0.0f, 2.0f));
+  EXPECT_FLOAT_EQ(map.value(far), 2.0f);
+  EXPECT_EQ(map.chunkCount(), 1u);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(map.addGaussian(Eigen::Vector3f(nan, 0, 0), 0.01f, 1.0f));
+  EXPECT_FALSE(map.addGaussian(Eigen::Vector3f(1e9f, 0, 0), 0.01f, 1.0f));  // beyond the range
+  EXPECT_FALSE(map.addGaussian(Eigen::Vector3f(0, 0, 0), -1.0f, 1.0f));
+  EXPECT_FLOAT_EQ(map.value(Eigen::Vector3f(nan, nan, nan)), 0.0f);
+  EXPECT_FLOAT_EQ(map.value(Eigen::Vector3f(1e9f, 0, 0)), 0.0f);
+  EXPECT_EQ(map.chunkCount(), 1u);
+  map.clear();
+  EXPECT_EQ(map.chunkCount(), 0u);
+  EXPECT_FLOAT_EQ(map.value(far), 0.0f);
+}
+
+TEST(ChunkedVoxelMap, MemoryBoundEvictsLeastRecentlyWritten) {
+  VoxelMapConfig config;
+  config.max_memory_bytes = 6 * ChunkedVoxelMap::kChunkBytes;
+  ChunkedVoxelMap map(config);
+  const auto chunk = [](int k) { return VoxelIndex(k * ChunkedVoxelMap::kChunkSide, 0, 0); };
+  for (int k = 0; k < 5; ++k) map.add(chunk(k), 1.0f);
+  map.add(chunk(0), 1.0f);  // chunk 0 written again: chunk 1 is now the oldest
+  for (int k = 5; k < 40; ++k) {
+    map.add(chunk(k), 1.0f);
+    ASSERT_LE(map.memoryBytes(), config.max_memory_bytes) << k;
+  }
+  EXPECT_GT(map.evictedChunks(), 0u);
+  EXPECT_LT(map.chunkCount(), 6u);
+  EXPECT_FLOAT_EQ(map.voxelValue(chunk(39)), 1.0f);  // the newest stays
+  EXPECT_FLOAT_EQ(map.voxelValue(chunk(1)), 0.0f);   // the oldest went first
+  // The hash table stays consistent through evictions (backward-shift deletion).
+  for (int k = 0; k < 40; ++k) {
+    const float v = map.voxelValue(chunk(k));
+    EXPECT_TRUE(v == 0.0f || v == 1.0f);
+  }
+  std::size_t listed = 0;
+  map.forEachVoxel(0.0f, [&](const VoxelIndex&, float) { ++listed; });
+  EXPECT_EQ(listed, map.chunkCount());
+  EXPECT_THROW(ChunkedVoxelMap(VoxelMapConfig{0.01, 1000}), std::invalid_argument);
+  EXPECT_THROW(ChunkedVoxelMap(VoxelMapConfig{-0.01, 0}), std::invalid_argument);
+}
+
+TEST(Ebslam3dConfig, ValidatesAndPresets) {
+  EXPECT_NO_THROW(Ebslam3dConfig::defaults().validate());
+  EXPECT_NO_THROW(Ebslam3dConfig::fast().validate());
+  const Ebslam3dConfig d = Ebslam3dConfig::defaults();
+  EXPECT_EQ(d.num_particles, 100);  // thesis 8.4 default set
+  EXPECT_EQ(d.resample_every, 100);
+  EXPECT_EQ(d.batch_size, 3);
+  EXPECT_EQ(d.event_share, 1.0);
+  EXPECT_EQ(d.voxel_size_m, 0.01);
+  EXPECT_EQ(d.splat_lambda, 1.5);
+  const auto bad = [](auto mutate) {
+    Ebslam3dConfig c;
+    mutate(c);
+    return c;
+  };
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.num_particles = 0; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.batch_size = 65; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.event_share = 0.0; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.score_alpha = 1.5; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.voxel_size_m = std::nan(""); })),
+               std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.max_range_m = 0.05; })), std::invalid_argument);
+}
+
+// Pure diffusion: with K beyond the run no resampling happens, so every particle is a random walk
+// of n steps: position variance n sigma^2 per axis, rotation angle^2 about n sigma^2.
+TEST(EventSlam3d, DiffusionFollowsEquations811To815) {
+  Ebslam3dConfig c;
+  c.num_particles = 4000;
+  c.batch_size = 1;
+  c.resample_every = 1000000;
+  c.sigma_position_m = 0.002;
+  c.sigma_rotation_rad = 0.003;
+  EventSlam3d slam(c);
+  PointEventVector events(100);
+  for (int k = 0; k < 100; ++k) {
+    events[k].t_us = k;
+    events[k].point = Eigen::Vector3f(0.1f, -0.2f, 1.5f);
+  }
+  slam.process(events);
+  double var_x = 0.0, var_z = 0.0, angle2 = 0.0;
+  for (int i = 0; i < c.num_particles; ++i) {
+    const Pose3 p = slam.particles().particle(i);
+    var_x += p.position.x() * p.position.x();
+    var_z += p.position.z() * p.position.z();
+    const double a = Eigen::AngleAxisd(p.orientation).angle();
+    angle2 += a * a;
+  }
+  const double n = c.num_particles;
+  const double table_var = 0.9987;  // FastNormalGenerator's variance
+  EXPECT_NEAR(var_x / n, 100 * table_var * 0.002 * 0.002, 0.08 * 100 * 0.002 * 0.002);
+  EXPECT_NEAR(var_z / n, 100 * table_var * 0.002 * 0.002, 0.08 * 100 * 0.002 * 0.002);
+  EXPECT_NEAR(angle2 / n, 100 * table_var * 0.003 * 0.003, 0.08 * 100 * 0.003 * 0.003);
+}
+
+// A smooth synthetic path that starts and ends at rest (the map is empty at the start, as on a
+// real take): 0.3 m sideways, 0.1 m up and back, a turn of 0.3 rad about y and a nod of 0.15 rad.
+Trajectory testPath(double duration_s) {
+  Trajectory path;
+  for (int k = 0; k <= 400; ++k) {
+    const double t = duration_s * k / 400.0;
+    const double u = 0.5 * (1.0 - std::cos(M_PI * t / duration_s));  // 0 -> 1, at rest at the ends
+    StampedPose p;
+    p.t_s = t;
+    p.position = Eigen::Vector3d(0.3 * u, 0.1 * std::sin(M_PI * u), 0.05 * u);
+    p.orientation = Eigen::AngleAxisd(0.3 * u, Eigen::Vector3d::UnitY()) *
+                    Eigen::AngleAxisd(0.15 * std::sin(M_PI * u), Eigen::Vector3d::UnitX());
+    path.push_back(p);
+  }
+  return path;
+}
+
+PointEventVector testEvents(const Trajectory& path) {
+  SyntheticRoomConfig room;
+  room.margin_m = 1.0;
+  room.edges_per_square_m = 8;
+  const auto scene = makeSyntheticRoom(path, room);
+  return simulateDepthEvents(scene, SyntheticDepthSensor{}, path, path.front().t_s,
+                             path.back().t_s);
+}
+
+TEST(EventSlam3d, TracksAKnownPathOnSyntheticDepthEvents) {
+  const Trajectory truth = testPath(3.0);
+  const PointEventVector events = testEvents(truth);
+  ASSERT_GT(events.size(), 5000u);
+  EventSlam3d slam(Ebslam3dConfig::defaults());
+  Trajectory estimate;
+  for (std::size_t i = 0; i < events.size(); i += 1000) {
+    const std::size_t n = std::min<std::size_t>(1000, events.size() - i);
+    slam.process(events.data() + i, n);
+    StampedPose p;
+    p.t_s = 1e-6 * static_cast<double>(events[i + n - 1].t_us);
+    p.position = slam.estimate().position;
+    p.orientation = slam.estimate().orientation;
+    if (estimate.empty() || p.t_s > estimate.back().t_s) estimate.push_back(p);
+  }
+  // The map frame is the start pose's frame, and the path starts at the identity: the estimate is
+  // compared with the ground truth directly, without any alignment.
+  double position_sq = 0.0, angle_sq = 0.0;
+  for (const StampedPose& e : estimate) {
+    const StampedPose t = interpolatePose(truth, e.t_s);
+    position_sq += (e.position - t.position).squaredNorm();
+    const double angle = e.orientation.angularDistance(t.orientation);
+    angle_sq += angle * angle;
+  }
+  const double n = static_cast<double>(estimate.size());
+  EXPECT_LT(std::sqrt(position_sq / n), 0.03);
+  EXPECT_LT(std::sqrt(angle_sq / n) * 180.0 / M_PI, 2.0);
+  EXPECT_LT((estimate.back().position - truth.back().position).norm(), 0.05);
+  EXPECT_GT(slam.map().chunkCount(), 10u);
+  EXPECT_LE(slam.peakMemoryBytes(), 30u << 20);
+}
+
+TEST(EventSlam3d, BadPointsAreSkippedAndCountedWithoutChangingTheResult) {
+  const Trajectory truth = testPath(0.5);
+  const PointEventVector events = testEvents(truth);
+  ASSERT_GT(events.size(), 2000u);
+  PointEventVector dirty;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    dirty.push_back(events[i]);
+    if (i % 7 == 0) {
+      PointEvent e = events[i];
+      e.point = i % 14 == 0 ? Eigen::Vector3f(nan, 0.0f, 1.0f) : Eigen::Vector3f(0, 0, 1e6f);
+      if (i % 21 == 0) e.point = Eigen::Vector3f(inf, 0.0f, 0.0f);
+      if (i % 35 == 0) e.point = Eigen::Vector3f(0.0f, 0.0f, 0.01f);  // nearer than min_range
+      dirty.push_back(e);
+      ++bad;
+    }
+  }
+  EventSlam3d clean_slam(Ebslam3dConfig::defaults());
+  EventSlam3d dirty_slam(Ebslam3dConfig::defaults());
+  clean_slam.process(events);
+  const EventSlam3d::ProcessStats stats = dirty_slam.process(dirty);
+  EXPECT_EQ(stats.rejected, bad);
+  EXPECT_EQ(stats.used, events.size());
+  EXPECT_EQ(dirty_slam.rejectedEvents(), bad);
+  EXPECT_EQ(dirty_slam.processedEvents(), clean_slam.processedEvents());
+  // Identical filter: the rejected events take no part in batches, shares or randomness.
+  EXPECT_EQ(dirty_slam.estimate().position, clean_slam.estimate().position);
+  EXPECT_TRUE(dirty_slam.estimate().position.allFinite());
+}
+
+TEST(EventSlam3d, EmptyAndBackwardsInput) {
+  const Trajectory truth = testPath(0.3);
+  PointEventVector events = testEvents(truth);
+  ASSERT_GT(events.size(), 100u);
+  EventSlam3d slam(Ebslam3dConfig::defaults());
+  EXPECT_EQ(slam.process(nullptr, 0).used, 0u);  // empty: no-op
+  slam.process(events.data(), 100);
+  const std::uint64_t processed = slam.processedEvents();
+  const Pose3 before = slam.estimate();
+  // A call whose events go back in time throws and processes nothing.
+  PointEventVector backwards(events.begin() + 100, events.begin() + 200);
+  backwards[50].t_us = events.front().t_us - 1;
+  EXPECT_THROW(slam.process(backwards), std::invalid_argument);
+  EXPECT_EQ(slam.processedEvents(), processed);
+  EXPECT_EQ(slam.estimate().position, before.position);
+  // Earlier than the previous call's last event: also refused.
+  PointEventVector old(events.begin(), events.begin() + 10);
+  for (auto& e : old) e.t_us = events.front().t_us - 1;
+  EXPECT_THROW(slam.process(old), std::invalid_argument);
+  // After reset the stream starts afresh with an empty map.
+  slam.reset();
+  EXPECT_EQ(slam.map().chunkCount(), 0u);
+  EXPECT_NO_THROW(slam.process(old));
+  // All-rejected input: counted, nothing processed, estimate unchanged.
+  PointEventVector nans(5);
+  for (auto& e : nans) {
+    e.t_us = events.front().t_us;
+    e.point = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  }
+  const Pose3 kept = slam.estimate();
+  const auto stats = slam.process(nans);
+  EXPECT_EQ(stats.rejected, 5u);
+  EXPECT_EQ(stats.used, 0u);
+  EXPECT_EQ(slam.estimate().position, kept.position);
+}
+
+TEST(EventSlam3d, DeterministicForASeedAndEventShareThinsEvenly) {
+  const Trajectory truth = testPath(0.4);
+  const PointEventVector events = testEvents(truth);
+  Ebslam3dConfig c = Ebslam3dConfig::defaults();
+  EventSlam3d a(c), b(c);
+  a.process(events);
+  b.process(events);
+  EXPECT_EQ(a.estimate().position, b.estimate().position);
+  c.seed = 2;
+  EventSlam3d other(c);
+  other.process(events);
+  EXPECT_NE(other.estimate().position, a.estimate().position);
+  c.event_share = 0.25;
+  EventSlam3d quarter(c);
+  const auto stats = quarter.process(events);
+  EXPECT_NEAR(static_cast<double>(stats.used), 0.25 * events.size(), 1.0);
+  EXPECT_EQ(stats.used + stats.skipped + stats.rejected, events.size());
+}
+
+}  // namespace
+}  // namespace ebslam
