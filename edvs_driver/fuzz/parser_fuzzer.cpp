@@ -22,11 +22,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     parser.feed(data + pos, n, host, out);
     host += (data[pos] & 0x0F) * 1000;
   }
+  parser.flush(out);
   for (std::size_t i = 0; i < out.size(); ++i) {
     if (out[i].x >= 128 || out[i].y >= 128) std::abort();
     if (i > 0 && out[i].t_us < out[i - 1].t_us) std::abort();
   }
   const auto& s = parser.stats();
   if (s.bytes_in != size || s.bytes_dropped > s.bytes_in) std::abort();
+  // Fixed-size formats: every byte was published in an event, dropped, or is still pending.
+  const int frame = edvs_driver::minEventBytes(format);
+  if (format != edvs_driver::EventFormat::kDelta &&
+      s.events * static_cast<std::uint64_t>(frame) + s.bytes_dropped + parser.pendingBytes() !=
+          s.bytes_in) {
+    std::abort();
+  }
   return 0;
 }

@@ -73,6 +73,8 @@ DeviceUri parseDeviceUri(const std::string& uri) {
       out.firmware = *fw;
     } else if (key == "serial_number" || key == "serial") {
       out.serial_number = value;
+    } else if (key == "loop") {
+      out.file_loop = parseInt(key, value, 0, 1) == 1;
     } else if (key == "rate") {
       char* end = nullptr;
       out.file_rate = std::strtod(value.c_str(), &end);
@@ -80,8 +82,9 @@ DeviceUri parseDeviceUri(const std::string& uri) {
         throw std::invalid_argument("device URI: rate must be a number of bytes/s >= 0");
       }
     } else {
-      throw std::invalid_argument("device URI: unknown query key '" + key +
-                                  "' (known: baud, rtscts, format, firmware, serial_number, rate)");
+      throw std::invalid_argument(
+          "device URI: unknown query key '" + key +
+          "' (known: baud, rtscts, format, firmware, serial_number, rate, loop)");
     }
   }
   if (format_text) {
@@ -186,6 +189,7 @@ void EdvsDevice::send(const std::string& command) {
 void EdvsDevice::open() {
   close();
   transport_ = factory_(uri_);
+  gone_ = nullptr;
   streaming_ = false;
   banner_.clear();
   parser_.restart();
@@ -286,13 +290,32 @@ void EdvsDevice::sendBiases() {
 
 std::size_t EdvsDevice::read(ebslam::EventVector& out, int timeout_ms) {
   if (!transport_) throw DeviceGone("eDVS not open");
-  const std::size_t n = transport_->read(buffer_.data(), buffer_.size(), timeout_ms);
+  if (gone_) {
+    std::exception_ptr gone = gone_;
+    gone_ = nullptr;
+    std::rethrow_exception(gone);
+  }
+  std::size_t n = 0;
+  try {
+    n = transport_->read(buffer_.data(), buffer_.size(), timeout_ms);
+  } catch (const DeviceGone&) {
+    // The events still waiting for confirmation are complete: hand them out first and report
+    // the loss at the next read.
+    const std::size_t flushed = parser_.flush(out);
+    if (flushed == 0) throw;
+    gone_ = std::current_exception();
+    return flushed;
+  }
   if (n == 0) {
+    // The line is idle: no further bytes will confirm the events held back; decide them now.
     parser_.noteIdle();
-    return 0;
+    return parser_.flush(out);
   }
   stats_.bytes_read += n;
-  return parser_.feed(buffer_.data(), n, monotonicMicros(), out);
+  // A capture replays bytes whose arrival times were not recorded: no host time for them.
+  const std::optional<std::int64_t> host_us =
+      transport_->acceptsCommands() ? std::optional<std::int64_t>(monotonicMicros()) : std::nullopt;
+  return parser_.feed(buffer_.data(), n, host_us, out);
 }
 
 const DeviceStats& EdvsDevice::stats() const {

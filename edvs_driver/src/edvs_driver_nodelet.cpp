@@ -38,7 +38,7 @@ class EdvsDriverNodelet : public nodelet::Nodelet {
   ~EdvsDriverNodelet() override { shutdown(); }
 
  private:
-  enum class Link { kConnecting, kStreaming, kDisconnected };
+  enum class Link { kConnecting, kStreaming, kDisconnected, kCaptureEnded };
 
   void onInit() override;
   void shutdown();
@@ -75,7 +75,9 @@ class EdvsDriverNodelet : public nodelet::Nodelet {
   ros::WallTime next_attempt_;
   double backoff_s_ = 0.0;
   std::string last_error_;
-  std::string last_disconnect_;  // why the last working connection ended
+  bool capture_ended_ = false;       // the capture file was read to its end
+  ParserStats parser_at_last_diag_;  // counters at the previous diagnostics update
+  std::string last_disconnect_;      // why the last working connection ended
   std::uint64_t connects_ = 0;
   std::uint64_t failed_attempts_ = 0;
   std::uint64_t disconnects_ = 0;
@@ -179,6 +181,17 @@ void EdvsDriverNodelet::worker() {
     device_->close();
     publishPending(false);
     std::lock_guard<std::mutex> lock(mutex_);
+    if (capture_ended_) {
+      capture_ended_ = false;
+      if (!device_->uri().file_loop) {
+        // A capture ends at its end: nothing to reconnect to.
+        link_ = Link::kCaptureEnded;
+        break;
+      }
+      connect_requested_ = true;  // loop=1: replay at once
+      link_ = Link::kConnecting;
+      continue;
+    }
     ++disconnects_;
     link_ = Link::kDisconnected;
     backoff_s_ = params_.reconnect_min_s;  // a device that was there is retried soon
@@ -241,6 +254,12 @@ void EdvsDriverNodelet::readLoop() {
     try {
       for (const auto& [index, value] : changes) device_->setBias(index, value);
       device_->read(batch, 20);
+    } catch (const CaptureEnded& e) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      capture_ended_ = true;
+      NODELET_INFO("edvs_driver: %s%s", e.what(),
+                   device_->uri().file_loop ? ": replaying it again (loop=1)" : "");
+      return;
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> lock(mutex_);
       last_error_ = std::string("device lost: ") + e.what();
@@ -358,12 +377,28 @@ void EdvsDriverNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
     case Link::kConnecting:
       status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "connecting");
       break;
+    case Link::kCaptureEnded:
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK, "capture ended");
+      break;
     case Link::kDisconnected:
       status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "disconnected: %s",
                       last_error_.c_str());
       break;
   }
   const ParserStats& p = stats_.parser;
+  const ParserStats& q = parser_at_last_diag_;
+  if (noiseCount(p) != noiseCount(q)) {
+    // Garbage arrived since the last update: say how much, while it lasts.
+    status.mergeSummaryf(
+        diagnostic_msgs::DiagnosticStatus::WARN,
+        "line noise in the last %.1f s: %lu resyncs, %lu rejected events, %lu implausible "
+        "timestamp jumps, %lu dropped bytes",
+        dt, static_cast<unsigned long>(p.resyncs - q.resyncs),
+        static_cast<unsigned long>(p.rejected_events - q.rejected_events),
+        static_cast<unsigned long>(p.implausible_jumps - q.implausible_jumps),
+        static_cast<unsigned long>(p.bytes_dropped - q.bytes_dropped));
+  }
+  parser_at_last_diag_ = p;
   if (link_ == Link::kStreaming && format_suspect_) {
     status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                          "the stream does not look like format %s (dropped bytes or impossible "
@@ -381,6 +416,8 @@ void EdvsDriverNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("dropped bytes", p.bytes_dropped);
   status.add("resyncs", p.resyncs);
   status.add("implausible timestamp jumps", p.implausible_jumps);
+  status.add("rejected events", p.rejected_events);
+  status.add("clock jumps", p.clock_jumps);
   status.add("timestamp wraps", p.wraps);
   status.add("reconnects", reconnects);
   status.add("disconnects", disconnects_);

@@ -123,6 +123,8 @@ struct Emulator::State {
   std::vector<std::string> violations;
   ebslam::EventVector sent;
   std::uint64_t garbage_bytes = 0;
+  std::size_t produced = 0;  // events taken from the source, cut ones included
+  std::size_t cut = 0;       // events sent only in part
 
   explicit State(EmulatorConfig c) : config(std::move(c)), garbage_rng(config.seed ^ 0x9E3779B9u) {}
 
@@ -131,7 +133,7 @@ struct Emulator::State {
   }
 
   bool sourceHasNext() {
-    if (config.max_events > 0 && sent.size() >= config.max_events) return false;
+    if (config.max_events > 0 && produced >= config.max_events) return false;
     if (next_event) return true;
     if (config.events.empty()) {
       next_event = generator->next();
@@ -373,9 +375,19 @@ struct Emulator::State {
       }
       const std::size_t before = event_out.size();
       encodeEvent(e, format, previous_valid ? previous_device_t : e.t_us, config.on_bit, event_out);
+      const bool cut_here =
+          std::binary_search(config.cut_events.begin(), config.cut_events.end(), produced);
+      ++produced;
+      if (cut_here) {
+        // Only the first 1..n-1 bytes of this event reach the line.
+        const std::size_t n = event_out.size() - before;
+        event_out.resize(before + 1 + garbage_rng() % (n - 1));
+        ++cut;
+      }
       segment_bytes += event_out.size() - before;
       previous_device_t = e.t_us;
       previous_valid = true;
+      if (cut_here) continue;
       sent.push_back(e);
       if (config.stall_after_events && sent.size() == *config.stall_after_events) {
         stall_until = now + std::chrono::milliseconds(config.stall_ms);
@@ -415,6 +427,7 @@ Emulator::Emulator(EmulatorConfig config) : state_(std::make_unique<State>(std::
   if (s.config.on_bit != 0 && s.config.on_bit != 1) {
     throw std::invalid_argument("EmulatorConfig::on_bit must be 0 or 1");
   }
+  std::sort(s.config.cut_events.begin(), s.config.cut_events.end());
   if (s.config.events.empty() && !(s.config.rate_hz > 0)) {
     throw std::invalid_argument("EmulatorConfig::rate_hz must be > 0 for the generator");
   }
@@ -546,6 +559,11 @@ ebslam::EventVector Emulator::sentEvents() const {
 std::size_t Emulator::eventsSent() const {
   std::lock_guard<std::mutex> lock(state_->mutex);
   return state_->sent.size();
+}
+
+std::size_t Emulator::eventsCut() const {
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  return state_->cut;
 }
 
 std::uint64_t Emulator::garbageBytesSent() const {

@@ -280,11 +280,33 @@ EventParser::EventParser(const ParserConfig& config)
   if (config_.max_consecutive_rejections < 0) {
     throw std::invalid_argument("ParserConfig::max_consecutive_rejections must be >= 0");
   }
+  if (config_.confirm_events < 0) {
+    throw std::invalid_argument("ParserConfig::confirm_events must be >= 0");
+  }
+  if (config_.max_gap_bytes < 0) {
+    throw std::invalid_argument("ParserConfig::max_gap_bytes must be >= 0");
+  }
+}
+
+std::uint64_t noiseCount(const ParserStats& stats) {
+  return stats.bytes_dropped + stats.resyncs + stats.rejected_events + stats.implausible_jumps;
 }
 
 void EventParser::restart() {
+  // Bytes still held are lost with the stream (e.g. an event cut by a disconnect).
+  stats_.bytes_dropped += pendingBytes();
   unwrapper_ =
       TimestampUnwrapper(wrapPeriodUs(config_.format), config_.format == EventFormat::kDelta);
+  mode_decided_ = false;
+  chain_mode_ = false;
+  held_.clear();
+  held_host_.clear();
+  held_idle_.clear();
+  have_last_ = false;
+  have_latency_ = false;
+  behind_debt_us_ = 0;
+  last_ = FrameRef{};
+  last_time_us_ = 0;
   pending_ = 0;
   ts_accum_ = 0;
   in_garbage_ = false;
@@ -294,6 +316,7 @@ void EventParser::restart() {
 }
 
 void EventParser::restart(const ParserConfig& config) {
+  stats_.bytes_dropped += pendingBytes();
   ParserStats kept = stats_;
   *this = EventParser(config);
   stats_ = kept;
@@ -302,6 +325,296 @@ void EventParser::restart(const ParserConfig& config) {
 void EventParser::reset() {
   restart();
   stats_ = ParserStats{};
+}
+
+std::size_t EventParser::pendingBytes() const { return chain_mode_ ? held_.size() : pending_; }
+
+bool EventParser::isAbsolute() const { return wrapPeriodUs(config_.format) > 0; }
+
+bool EventParser::frameValid(std::size_t pos) const {
+  if ((held_[pos] & 0x80) == 0) return false;
+  ebslam::Event e;
+  e.y = static_cast<std::uint16_t>(held_[pos] & 0x7F);
+  e.x = static_cast<std::uint16_t>(held_[pos + 1] & 0x7F);
+  return config_.sensor.contains(e);
+}
+
+EventParser::FrameRef EventParser::frameAt(std::size_t pos) const {
+  const std::size_t size = static_cast<std::size_t>(minEventBytes(config_.format));
+  FrameRef f;
+  std::uint64_t raw = 0;
+  for (std::size_t k = 2; k < size; ++k) raw = (raw << 8) | held_[pos + k];
+  f.raw = static_cast<std::int64_t>(raw);
+  f.host_us = held_host_[pos + size - 1];  // the read that completed the frame
+  f.idle_epoch = held_idle_[pos + size - 1];
+  return f;
+}
+
+EventParser::Link EventParser::link(const FrameRef& a, const FrameRef& b) const {
+  const std::int64_t period = wrapPeriodUs(config_.format);
+  Link l;
+  std::int64_t step = b.raw - a.raw;
+  if (step < 0) {
+    step += period;
+    l.wraps = 1;
+  }
+  const std::int64_t host_elapsed = a.host_us != kNoHost && b.host_us != kNoHost
+                                        ? std::max<std::int64_t>(0, b.host_us - a.host_us)
+                                        : -1;
+  // Whole periods a quiet gap hid: only when the line was idle in between (no backlog), so
+  // host time is device time; rounded down with an eighth of a period of slack.
+  if (config_.infer_wraps_from_host_time && b.idle_epoch != a.idle_epoch &&
+      host_elapsed > period / 2) {
+    const std::int64_t excess = host_elapsed - step + period / 8;
+    const std::int64_t k = excess > 0 ? excess / period : 0;
+    if (k >= 1) {
+      step += k * period;
+      l.wraps += static_cast<std::uint64_t>(k);
+      l.wraps_from_host = static_cast<std::uint64_t>(k);
+    }
+  }
+  l.step_us = step;
+  // A step longer than the host clock allows is a framing error, not time.
+  // Without host time (a capture) only the order is known: a step of half a period or more
+  // could as well be a step back.
+  l.ok = host_elapsed >= 0 ? step <= host_elapsed + tolerance() : step < period / 2;
+  return l;
+}
+
+std::int64_t EventParser::tolerance() const {
+  // Host read scheduling and USB latency; below a quarter period, so that two garbage steps
+  // can never add up to a whole period between two reads.
+  return std::min(config_.jump_tolerance_us, wrapPeriodUs(config_.format) / 4);
+}
+
+EventParser::Link EventParser::linkFromLast(std::size_t pos) const {
+  const FrameRef f = frameAt(pos);
+  Link l = link(last_, f);
+  // The device clock never runs ahead of the host clock: an event's time is at most the host
+  // time of its read minus the smallest latency seen so far (plus lead_tolerance_us). This
+  // bounds the sum of steps that each looked plausible.
+  if (l.ok && f.host_us != kNoHost && have_latency_) {
+    l.ok = last_time_us_ + l.step_us <= f.host_us - min_latency_us_ + config_.lead_tolerance_us;
+  }
+  return l;
+}
+
+void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
+                               ebslam::EventVector& out) {
+  const FrameRef f = frameAt(pos);
+  ebslam::Event e;
+  e.y = static_cast<std::uint16_t>(held_[pos] & 0x7F);
+  e.x = static_cast<std::uint16_t>(held_[pos + 1] & 0x7F);
+  e.polarity = ((held_[pos + 1] >> 7) & 1) == config_.on_bit;
+  if (first) {
+    last_time_us_ = f.raw;
+  } else {
+    std::int64_t advance = std::max<std::int64_t>(0, step.step_us);
+    const std::int64_t repaid = std::min(advance, behind_debt_us_);
+    behind_debt_us_ -= repaid;
+    last_time_us_ += advance - repaid;
+    stats_.wraps += step.wraps;
+    stats_.wraps_from_host_time += step.wraps_from_host;
+  }
+  last_ = f;
+  have_last_ = true;
+  in_garbage_ = false;
+  if (f.host_us != kNoHost && trusted) {
+    // Only events with a long chain behind them teach the latency floor: a garbage event
+    // that slipped through must not loosen the bound for the next one.
+    const std::int64_t latency = f.host_us - last_time_us_;
+    if (!have_latency_ || latency < min_latency_us_) min_latency_us_ = latency;
+    have_latency_ = true;
+  }
+  e.t_us = last_time_us_;
+  ++stats_.events;
+  out.push_back(e);
+}
+
+void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
+  const std::size_t n = held_.size();
+  const std::size_t frame = static_cast<std::size_t>(minEventBytes(config_.format));
+  const std::size_t gap = static_cast<std::size_t>(config_.max_gap_bytes);
+  if (n < frame) return;
+  // Longest chain of plausible steps starting at each position (backwards over the bytes).
+  // A chain's whole advance must fit the host time it spans too (a frame misaligned by a byte
+  // can make a chain of small forward steps that runs far faster than the clock).
+  chain_length_.assign(n, 0);
+  chain_score_.assign(n, 0);
+  chain_open_.assign(n, 0);
+  chain_advance_.assign(n, 0);
+  chain_end_host_.assign(n, kNoHost);
+  const auto frame_score = static_cast<std::int64_t>(frame);
+  for (std::size_t p = n - frame + 1; p-- > 0;) {
+    if (!frameValid(p)) continue;
+    const FrameRef a = frameAt(p);
+    // Score of a chain: bytes its frames explain minus bytes it skips. True events lie back
+    // to back, so their chain skips only the garbage; a chain of frames that garbage or a
+    // misalignment made up has to skip bytes at nearly every step.
+    std::int64_t best_score = frame_score;
+    int best_length = 0;
+    bool best_open = p + frame + gap + frame > n;  // no successor yet, but one may still come
+    std::int64_t best_advance = 0;
+    std::int64_t best_end_host = a.host_us;
+    const std::size_t last_q = std::min(p + frame + gap, n - frame);
+    for (std::size_t q = p + frame; q <= last_q && q + frame <= n; ++q) {
+      if (chain_length_[q] == 0) continue;
+      const std::int64_t score =
+          frame_score + chain_score_[q] - static_cast<std::int64_t>(q - p - frame);
+      if (score <= best_score) continue;
+      const Link l = link(a, frameAt(q));
+      if (!l.ok) continue;
+      const std::int64_t advance = l.step_us + chain_advance_[q];
+      if (a.host_us != kNoHost && chain_end_host_[q] != kNoHost &&
+          advance > std::max<std::int64_t>(0, chain_end_host_[q] - a.host_us) + tolerance()) {
+        continue;
+      }
+      best_score = score;
+      best_length = chain_length_[q];
+      best_open = chain_open_[q] != 0;
+      best_advance = advance;
+      best_end_host = chain_end_host_[q];
+    }
+    chain_length_[p] = 1 + best_length;
+    chain_score_[p] = best_score;
+    chain_open_[p] = best_open ? 1 : 0;
+    chain_advance_[p] = best_advance;
+    chain_end_host_[p] = best_end_host;
+  }
+
+  const int confirm = config_.confirm_events + 1;
+  const std::size_t lookahead_bytes =
+      static_cast<std::size_t>(config_.lookahead_events) * frame + gap;
+  const int jump_chain = std::max(config_.max_consecutive_rejections, confirm);
+  std::size_t pos = 0;
+  while (pos + frame <= n) {
+    // Candidates: frames starting within one frame plus the gap allowance of the position.
+    const std::size_t window_last = std::min(pos + frame + gap, n - frame);
+    const bool window_complete = pos + frame + gap + frame <= n;
+    std::size_t best = n, unlinked = n, tied = n;
+    std::int64_t best_value = 0, unlinked_value = 0;
+    Link best_link;
+    for (std::size_t s = pos; s <= window_last; ++s) {
+      if (chain_length_[s] == 0) continue;
+      // Bytes skipped to reach a candidate count against it like bytes skipped in a chain.
+      const std::int64_t value = chain_score_[s] - static_cast<std::int64_t>(s - pos);
+      Link l;
+      if (have_last_) {
+        l = linkFromLast(s);
+        if (!l.ok) {
+          if (unlinked == n || value > unlinked_value) {
+            unlinked = s;
+            unlinked_value = value;
+          }
+          continue;
+        }
+      }
+      if (best == n || value > best_value) {
+        best = s;
+        best_value = value;
+        best_link = l;
+        tied = n;
+      } else if (value == best_value) {
+        tied = s;
+      }
+    }
+    bool clock_jump = false;
+    if (best != n && !flushing) {
+      if (chain_length_[best] < confirm && chain_open_[best]) break;
+      // Enough bytes behind the candidate for chains to be compared: a chain of frames
+      // misaligned by a byte can run on for a while, the true one for ever.
+      const bool enough_bytes = n - best >= lookahead_bytes;
+      const std::int64_t newest_host = held_host_[n - 1];
+      const std::int64_t head_host = held_host_[best + frame - 1];
+      const bool old_enough = newest_host != kNoHost && head_host != kNoHost &&
+                              newest_host - head_host >= config_.hold_us;
+      if (!enough_bytes && !old_enough) break;
+    }
+    if (best != n) {
+      if (tied != n) {
+        // Two frames explain the bytes equally well (garbage whose time fell between two true
+        // events): publishing either could invent an event, so neither is.
+        for (std::size_t s = pos; s <= tied; ++s) {
+          if (chain_length_[s] > 0) ++stats_.rejected_events;
+        }
+        stats_.bytes_dropped += tied + 1 - pos;
+        if (!in_garbage_) ++stats_.resyncs;
+        in_garbage_ = true;
+        pos = tied + 1;
+        continue;
+      }
+      if (!have_last_ && chain_length_[best] < confirm && !flushing) {
+        // The first event of a stream needs the full chain: nothing else vouches for it.
+        if (!window_complete) break;
+        best = n;
+      }
+    }
+    if (best == n && unlinked != n) {
+      // Nothing follows the last event plausibly: a long self-consistent chain means the device
+      // clock itself jumped (reset, or a misjudged last event); continue monotonically.
+      if (chain_length_[unlinked] >= jump_chain) {
+        best = unlinked;
+        clock_jump = true;
+      } else if (chain_open_[unlinked] && !flushing) {
+        break;  // not enough evidence yet
+      }
+    }
+    if (best == n && !window_complete && !flushing) break;
+    if (best == n) {
+      // Nothing usable starts here: drop one byte.
+      if (chain_length_[pos] > 0) ++stats_.rejected_events;
+      if (chain_length_[pos] > 0 && have_last_ && !linkFromLast(pos).ok) {
+        ++stats_.implausible_jumps;
+      }
+      ++stats_.bytes_dropped;
+      if (!in_garbage_) ++stats_.resyncs;
+      in_garbage_ = true;
+      ++pos;
+      continue;
+    }
+    for (std::size_t s = pos; s < best; ++s) {
+      if (chain_length_[s] > 0) {
+        ++stats_.rejected_events;
+        if (have_last_ && !linkFromLast(s).ok) ++stats_.implausible_jumps;
+      }
+    }
+    if (best > pos) {
+      stats_.bytes_dropped += best - pos;
+      if (!in_garbage_) ++stats_.resyncs;
+    }
+    if (clock_jump) {
+      ++stats_.clock_jumps;
+      ++stats_.implausible_jumps;
+      const FrameRef f = frameAt(best);
+      best_link = Link{};
+      best_link.ok = true;
+      const std::int64_t period = wrapPeriodUs(config_.format);
+      const std::int64_t behind = ((last_.raw - f.raw) % period + period) % period;
+      if (behind < tolerance()) {
+        // Slightly behind the last published event, which ran ahead: hold the time until the
+        // device clock has caught up, never stepping back.
+        best_link.step_us = 0;
+        behind_debt_us_ += behind;
+      } else {
+        best_link.step_us = f.host_us != kNoHost && last_.host_us != kNoHost
+                                ? std::max<std::int64_t>(0, f.host_us - last_.host_us)
+                                : 0;
+      }
+      have_latency_ = false;
+    }
+    publishFrame(best, best_link, !have_last_, chain_length_[best] >= 2 * confirm, out);
+    pos = best + frame;
+  }
+  held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(pos));
+  held_host_.erase(held_host_.begin(), held_host_.begin() + static_cast<std::ptrdiff_t>(pos));
+  held_idle_.erase(held_idle_.begin(), held_idle_.begin() + static_cast<std::ptrdiff_t>(pos));
+}
+
+std::size_t EventParser::flush(ebslam::EventVector& out) {
+  if (!chain_mode_) return 0;
+  const std::size_t before = out.size();
+  decideAbsolute(true, out);
+  return out.size() - before;
 }
 
 bool EventParser::emit(std::int64_t raw_time, std::optional<std::int64_t> host_us,
@@ -368,6 +681,19 @@ std::size_t EventParser::feed(const std::uint8_t* data, std::size_t size,
                               std::optional<std::int64_t> host_us, ebslam::EventVector& out) {
   const std::size_t before = out.size();
   stats_.bytes_in += size;
+  if (!mode_decided_ && size > 0) {
+    // Framing by evidence needs the host clock; a capture without read times keeps the
+    // byte-by-byte framing.
+    chain_mode_ = isAbsolute() && host_us.has_value();
+    mode_decided_ = true;
+  }
+  if (chain_mode_) {
+    held_.insert(held_.end(), data, data + size);
+    held_host_.insert(held_host_.end(), size, host_us ? *host_us : kNoHost);
+    held_idle_.insert(held_idle_.end(), size, idle_epoch_);
+    decideAbsolute(false, out);
+    return out.size() - before;
+  }
   const EventFormat format = config_.format;
   const std::size_t ts_bytes = static_cast<std::size_t>(timestampBytes(format));
   const std::size_t fixed_size = 2 + ts_bytes;
@@ -427,10 +753,12 @@ std::size_t EventParser::feed(const std::uint8_t* data, std::size_t size,
 }
 
 bool EventParser::formatSuspect(std::uint64_t min_events, double max_ratio) const {
-  if (stats_.events < min_events) return false;
+  // Enough evidence: the events, or (a format that yields few events) the bytes of as many.
+  if (stats_.events < min_events && stats_.bytes_in < 8 * min_events) return false;
   const double drop_ratio =
       stats_.bytes_in > 0 ? static_cast<double>(stats_.bytes_dropped) / stats_.bytes_in : 0.0;
-  const double jump_ratio = static_cast<double>(stats_.implausible_jumps) / stats_.events;
+  const double jump_ratio =
+      stats_.events > 0 ? static_cast<double>(stats_.implausible_jumps) / stats_.events : 0.0;
   return drop_ratio > max_ratio || jump_ratio > max_ratio;
 }
 
@@ -443,6 +771,7 @@ FormatGuess guessEventFormat(const std::vector<std::uint8_t>& bytes) {
     EventParser parser(cfg);
     ebslam::EventVector events;
     parser.feed(bytes, std::nullopt, events);
+    parser.flush(events);
     const ParserStats& s = parser.stats();
     const double drop = s.bytes_in ? static_cast<double>(s.bytes_dropped) / s.bytes_in : 1.0;
     const double jump = s.events ? static_cast<double>(s.implausible_jumps) / s.events : 1.0;

@@ -151,7 +151,7 @@ class CaptureFileTransport : public Transport {
     }
     in_.read(reinterpret_cast<char*>(buffer), static_cast<std::streamsize>(allowed));
     const auto n = static_cast<std::size_t>(in_.gcount());
-    if (n == 0) throw DeviceGone("capture file " + path_ + ": end of file");
+    if (n == 0) throw CaptureEnded("capture file " + path_ + ": end of file");
     delivered_ += n;
     return n;
   }

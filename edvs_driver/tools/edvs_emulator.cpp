@@ -9,6 +9,8 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <random>
+#include <set>
 #include <thread>
 
 #include "ebslam/event_io.h"
@@ -40,6 +42,10 @@ int main(int argc, char** argv) {
   app.add_option("--baud", baud, "emulated line rate [bit/s], 8N1; 0 = unlimited");
   app.add_option("--garbage", config.garbage_probability,
                  "probability per event of 1..8 random bytes");
+  std::size_t cuts = 0;
+  app.add_option("--cuts", cuts,
+                 "cut this many random events in the middle (first 1..n-1 bytes sent; needs "
+                 "--max-events or --file)");
   app.add_option("--stale-bytes", config.stale_bytes, "bytes of an old stream waiting at open");
   app.add_option("--stall-after", stall_after, "stall after N events...");
   app.add_option("--stall-ms", config.stall_ms, "...for this many milliseconds");
@@ -84,6 +90,14 @@ int main(int argc, char** argv) {
       }
       if (config.events.empty()) throw std::runtime_error("no events to stream in " + file);
     }
+    if (cuts > 0) {
+      const std::size_t total = config.max_events > 0 ? config.max_events : config.events.size();
+      if (total < 2) throw std::invalid_argument("--cuts needs --max-events or --file");
+      std::mt19937 rng(config.seed ^ 0x5bd1e995u);
+      std::set<std::size_t> at;
+      while (at.size() < std::min(cuts, total / 2)) at.insert(1 + rng() % (total - 1));
+      config.cut_events.assign(at.begin(), at.end());
+    }
     edvs_driver::Emulator emulator(config);
     std::printf("edvs_emulator: device %s  (uri %s)\n", emulator.devicePath().c_str(),
                 emulator.uri().c_str());
@@ -95,8 +109,9 @@ int main(int argc, char** argv) {
                                               std::chrono::duration<double>(duration_s))) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
-    std::printf("edvs_emulator: sent %zu events, %lu garbage bytes\n", emulator.eventsSent(),
-                static_cast<unsigned long>(emulator.garbageBytesSent()));
+    std::printf("edvs_emulator: sent %zu events, %lu garbage bytes, %zu events cut\n",
+                emulator.eventsSent(), static_cast<unsigned long>(emulator.garbageBytesSent()),
+                emulator.eventsCut());
     for (const std::string& v : emulator.violations()) {
       std::printf("edvs_emulator: protocol violation: %s\n", v.c_str());
     }

@@ -7,12 +7,15 @@
 //   serial://?serial_number=FT4XYZ12&format=E2   (FTDI bridge chosen by USB serial number)
 //   tcp://192.168.201.62:56000?format=E3           (eDVS WiFi module)
 //   file:///path/capture.raw?format=E2&rate=400000 (raw byte capture, paced at rate bytes/s;
-//                                                   rate=0 reads as fast as possible)
+//                                                   rate=0 reads as fast as possible; it ends
+//                                                   at its end unless loop=1)
 // Query keys: baud (serial), rtscts (serial, 0/1), format (E0..E4 for the firmware, or
-// none/delta/ts16/ts24/ts32), firmware (current/legacy), serial_number (serial), rate (file).
+// none/delta/ts16/ts24/ts32), firmware (current/legacy), serial_number (serial), rate (file),
+// loop (file, 0/1).
 
 #include <array>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -37,6 +40,7 @@ struct DeviceUri {
   std::optional<EventFormat> format;         ///< from `format=`, if given
   Firmware firmware = Firmware::kCurrent;
   double file_rate = 400000.0;  ///< file pacing [bytes/s], 0 = unpaced
+  bool file_loop = false;       ///< file: replay again from the start at its end (loop=1)
 };
 
 /// Parses a device URI. Throws std::invalid_argument naming the problem (unknown scheme,
@@ -91,7 +95,10 @@ class EdvsDevice {
 
   /// Reads what arrived within `timeout_ms` and appends the decoded events (device time,
   /// unwrapped, microseconds). host_us is stamped from CLOCK_MONOTONIC. Returns the number of
-  /// events appended. Throws DeviceGone when the device disappears.
+  /// events appended. With a timestamped format the last few events of a read wait for the
+  /// next one to confirm them (see EventParser); a read that times out without bytes releases
+  /// them. Throws DeviceGone when the device disappears (after a last read that returns the
+  /// events still held, if any).
   std::size_t read(ebslam::EventVector& out, int timeout_ms);
 
   /// Sets one bias (index 0..11, 24-bit value). Sent at once while streaming (followed by !BF),
@@ -124,6 +131,7 @@ class EdvsDevice {
   bool streaming_ = false;
   std::string banner_;
   std::vector<std::uint8_t> buffer_;
+  std::exception_ptr gone_;  // a DeviceGone held back while the last events were handed out
 };
 
 /// Opens the transport a URI names (resolving serial_number through USB discovery).

@@ -40,7 +40,10 @@ struct EmulatorConfig {
 
   // Faults.
   double garbage_probability = 0.0;  ///< per event: insert 1..8 random bytes before it
-  std::size_t stale_bytes = 0;       ///< bytes of an old stream waiting when the host opens
+  /// Indices (0-based, in streaming order) of events cut in the middle: only their first
+  /// 1..n-1 bytes are sent (a glitch on the line); they are not in sentEvents().
+  std::vector<std::size_t> cut_events;
+  std::size_t stale_bytes = 0;  ///< bytes of an old stream waiting when the host opens
   std::optional<std::size_t> stall_after_events;   ///< stop sending after this many events...
   int stall_ms = 0;                                ///< ...for this long, then continue
   std::optional<std::size_t> vanish_after_events;  ///< close the device after this many events
@@ -82,6 +85,7 @@ class Emulator {
   ebslam::EventVector sentEvents() const;
   std::size_t eventsSent() const;
   std::uint64_t garbageBytesSent() const;
+  std::size_t eventsCut() const;  ///< events sent only in part (cut_events reached so far)
   bool streaming() const;
   EventFormat format() const;
   int appearances() const;  ///< 1 + number of times it came back after vanishing

@@ -19,6 +19,7 @@
 // its `parity` field). Other public drivers read the bit the other way round; a sensor whose
 // polarities come out swapped is handled by ParserConfig::on_bit = 0.
 
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -124,7 +125,28 @@ struct ParserConfig {
   /// TimestampUnwrapper). Right for a real device; wrong when the host stalls for more than
   /// ~7/8 of a period while the device side also paused with events queued.
   bool infer_wraps_from_host_time = true;
+  /// Absolute-timestamp formats (E2..E4): an unconfirmed stream (no event published yet, or
+  /// every frame after the last published event refused) is taken to have a new clock (device
+  /// reset) once this many consecutive frames agree with each other; time continues
+  /// monotonically from the last published event.
   int max_consecutive_rejections = 8;
+  /// Absolute-timestamp formats: an event is published only once this many following events
+  /// agree with it (forward steps the host clock allows), or the line went idle (flush()).
+  /// Garbage that happens to look like an event almost never has such a chain behind it.
+  int confirm_events = 3;
+  /// Absolute-timestamp formats: most garbage bytes between two events of one confirming chain.
+  int max_gap_bytes = 16;
+  /// Absolute-timestamp formats: an event is decided once this many events' worth of bytes
+  /// follow it, or its bytes are hold_us old (host time of the newest read), or flush(). The
+  /// competing explanations of the bytes are compared over that horizon: a chain of frames
+  /// misaligned by one byte can look plausible for ~10 events at high rates (E2), the true
+  /// chain goes on.
+  int lookahead_events = 32;
+  /// Absolute-timestamp formats: an event may be this much later than the host time of its
+  /// read minus the smallest latency (host minus device time) seen so far [us]; covers the
+  /// jitter of that floor. Larger leads are framing errors.
+  std::int64_t lead_tolerance_us = 2000;
+  std::int64_t hold_us = 2000;
 };
 
 /// Counters of one parser. All counts since construction or reset().
@@ -136,9 +158,13 @@ struct ParserStats {
   std::uint64_t wraps = 0;                 ///< timestamp wrap-arounds unwrapped
   std::uint64_t wraps_from_host_time = 0;  ///< extra whole wrap periods inferred from host time
   std::uint64_t implausible_jumps = 0;     ///< see ParserConfig::jump_tolerance_us
-  std::uint64_t rejected_events = 0;       ///< implausible events dropped as framing errors
+  std::uint64_t rejected_events = 0;       ///< event-like frames refused as framing errors
   std::uint64_t clock_jumps = 0;           ///< device clock discontinuities accepted
 };
+
+/// Sum of the counters that only line noise or a wrong format raise (dropped bytes, resyncs,
+/// rejected events, implausible jumps): a change means garbage arrived.
+std::uint64_t noiseCount(const ParserStats& stats);
 
 /// Unwraps an N-bit device clock to 64-bit microseconds that never run backwards.
 ///
@@ -202,6 +228,20 @@ class TimestampUnwrapper {
 /// counted; parsing resumes at the next byte with the top bit set. Timestamps are unwrapped to
 /// 64-bit device microseconds that never run backwards. For kNone (no device timestamps) the
 /// event time is the host receive time passed to feed(), clamped so it never runs backwards.
+///
+/// Absolute-timestamp formats (kAbs16/24/32) fed with host times (a live device; a capture
+/// parsed without read times keeps the byte-by-byte framing) are framed by evidence: a frame
+/// (a byte with the top bit set and the bytes after it) becomes an event only when it follows
+/// the last published event by a forward step the host clock allows (host time between the
+/// reads plus ParserConfig::jump_tolerance_us, at most a quarter period; without host time a
+/// quarter period) and config().confirm_events frames after it, with at most max_gap_bytes of
+/// garbage between them, chain on with such steps. Of the frames starting near the current
+/// position, the one with the longest chain wins; the bytes before it are dropped and a refused
+/// frame costs only its first byte, so an event that garbage overlapped is found again. Garbage
+/// can then only pass as an event when its time lies between two true neighbours, so the clock
+/// never runs ahead of the stream by more than one inter-event gap and never gains a wrap
+/// period from garbage. The last confirm_events events of a read wait for the next read or for
+/// flush().
 class EventParser {
  public:
   explicit EventParser(const ParserConfig& config = {});
@@ -216,8 +256,15 @@ class EventParser {
     return feed(bytes.data(), bytes.size(), host_us, out);
   }
 
+  /// Decides the events held back for confirmation with the evidence there is and appends the
+  /// ones that follow the last published event plausibly (call when the line went idle or the
+  /// stream ended). An incomplete event stays pending. Returns the number of events appended.
+  std::size_t flush(ebslam::EventVector& out);
+
   /// Forgets a partial event and the timestamp history (e.g. after a reconnect or a format
-  /// change); counters are kept. Pass a config to change the format.
+  /// change); the bytes still held (an event cut by a disconnect, or events not yet confirmed:
+  /// call flush() first to keep those) are counted as dropped; counters are kept. Pass a config
+  /// to change the format.
   void restart();
   void restart(const ParserConfig& config);
   /// Clears the counters as well.
@@ -226,10 +273,12 @@ class EventParser {
   const ParserConfig& config() const { return config_; }
   const ParserStats& stats() const { return stats_; }
   /// Bytes of an incomplete event held back, waiting for the next feed().
-  std::size_t pendingBytes() const { return pending_; }
+  std::size_t pendingBytes() const;
   /// Tells the parser that a read returned no bytes (the line was idle); see TimestampUnwrapper.
   void noteIdle() {
-    if (config_.infer_wraps_from_host_time) unwrapper_.noteIdle();
+    if (!config_.infer_wraps_from_host_time) return;
+    unwrapper_.noteIdle();
+    ++idle_epoch_;
   }
 
   /// True when the stream does not look like `config().format`: after at least
@@ -243,6 +292,46 @@ class EventParser {
   // Drops the first byte of the rejected frame and parses the rest again.
   void refeedAfterReject(std::optional<std::int64_t> host_us, ebslam::EventVector& out);
 
+  // Absolute-timestamp formats: framing by chains of plausible steps (see the class comment).
+  struct Link {
+    bool ok = false;
+    std::int64_t step_us = 0;
+    std::uint64_t wraps = 0;
+    std::uint64_t wraps_from_host = 0;
+  };
+  struct FrameRef {
+    std::int64_t raw = 0;
+    std::int64_t host_us = 0;  // kNoHost if unknown
+    std::uint32_t idle_epoch = 0;
+  };
+  static constexpr std::int64_t kNoHost = INT64_MIN;
+  bool isAbsolute() const;
+  bool frameValid(std::size_t pos) const;
+  FrameRef frameAt(std::size_t pos) const;
+  Link link(const FrameRef& a, const FrameRef& b) const;
+  Link linkFromLast(std::size_t pos) const;
+  std::int64_t tolerance() const;
+  void publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
+                    ebslam::EventVector& out);
+  void decideAbsolute(bool flushing, ebslam::EventVector& out);
+
+  std::vector<std::uint8_t> held_;         // bytes after the last published event
+  std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
+  std::vector<std::uint32_t> held_idle_;   // idle epoch at the arrival of each held byte
+  std::vector<int> chain_length_;          // per held position: frames in its best chain
+  std::vector<std::int64_t> chain_score_;  // per held position: bytes explained minus skipped
+  std::vector<char> chain_open_;           // per held position: the chain may grow with more bytes
+  std::vector<std::int64_t> chain_advance_;   // per held position: device time its chain spans
+  std::vector<std::int64_t> chain_end_host_;  // per held position: host time of its chain's end
+  std::uint32_t idle_epoch_ = 0;
+  bool mode_decided_ = false;  // set by the first bytes fed
+  bool chain_mode_ = false;    // absolute format fed with host times: framing by evidence
+  bool have_last_ = false;
+  FrameRef last_;
+  std::int64_t last_time_us_ = 0;
+  std::int64_t behind_debt_us_ = 0;  // device time to absorb before the clock advances again
+  bool have_latency_ = false;
+  std::int64_t min_latency_us_ = 0;  // smallest host time minus device time published
   ParserConfig config_;
   ParserStats stats_;
   TimestampUnwrapper unwrapper_;

@@ -18,13 +18,19 @@ class DeviceGone : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A capture file was read to its end (a DeviceGone: the stream is over, not lost).
+class CaptureEnded : public DeviceGone {
+ public:
+  using DeviceGone::DeviceGone;
+};
+
 /// A bidirectional byte stream to an eDVS.
 class Transport {
  public:
   virtual ~Transport() = default;
   /// Reads up to `size` bytes, waiting at most `timeout_ms` for the first one. Returns the
-  /// number read, 0 on timeout. Throws DeviceGone when the device is gone (or, for a file, at
-  /// its end).
+  /// number read, 0 on timeout. Throws DeviceGone when the device is gone (a capture file
+  /// throws CaptureEnded at its end).
   virtual std::size_t read(std::uint8_t* buffer, std::size_t size, int timeout_ms) = 0;
   /// Writes all of `data` in one write call (one command per call: several commands in one
   /// write confuse the firmware). Throws DeviceGone on failure.
