@@ -57,6 +57,15 @@ void CameraModel::validate() const {
       throw std::invalid_argument(
           "CameraModel: radial distortion (kappa1, kappa2) is not monotonic inside the sensor");
     }
+    if (distortion_model == DistortionModel::kDivideEq81) {
+      // r / L(r) must increase with r (derivative (1 - k2 r^2) / L^2) with L > 0.
+      if (distortionFactor(*this, r) <= 0.0 || 1.0 - kappa2 * r * r <= 0.0) {
+        throw std::invalid_argument(
+            "CameraModel: eq. 8.1 distortion (kappa1, kappa2) is not monotonic inside the sensor");
+      }
+      if (r / distortionFactor(*this, r) >= sensor_radius) break;
+      continue;
+    }
     const double covered =
         distortion_model == DistortionModel::kDistortEq63 ? r * distortionFactor(*this, r) : r;
     if (covered >= sensor_radius) break;
@@ -102,6 +111,11 @@ Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& undistorted_px) cons
   if (distortion_model == DistortionModel::kDistortEq63) {
     return principal_point + d * distortionFactor(*this, r);  // eq. 6.3
   }
+  if (distortion_model == DistortionModel::kDivideEq81) {
+    const double factor = distortionFactor(*this, r);
+    if (!(factor > 0.0)) return undistorted_px;
+    return principal_point + d / factor;  // eq. 8.1
+  }
   const std::optional<double> rd = invertRadius(*this, r);  // inverse of eq. 8.3
   if (!rd || r == 0.0) return undistorted_px;
   return principal_point + d * (*rd / r);
@@ -112,6 +126,17 @@ std::optional<Eigen::Vector2d> CameraModel::undistort(const Eigen::Vector2d& dis
   const double rd = d.norm();
   if (distortion_model == DistortionModel::kUndistortEq83) {
     return principal_point + d * distortionFactor(*this, rd);  // eq. 8.3
+  }
+  if (distortion_model == DistortionModel::kDivideEq81) {
+    // Inverse of eq. 8.1: r_d (1 + k1 r + k2 r^2) = r, the root continuous with r = r_d at 0,
+    // r = 2 r_d / ((1 - k1 r_d) + sqrt((1 - k1 r_d)^2 - 4 k2 r_d^2)).
+    if (rd == 0.0) return distorted_px;
+    const double a = 1.0 - kappa1 * rd;
+    const double discriminant = a * a - 4.0 * kappa2 * rd * rd;
+    if (discriminant < 0.0 || a + std::sqrt(discriminant) <= 0.0) return std::nullopt;
+    const double r = 2.0 * rd / (a + std::sqrt(discriminant));
+    if (!(r > 0.0) || 1.0 - kappa2 * r * r <= 0.0) return std::nullopt;
+    return principal_point + d * (r / rd);
   }
   const std::optional<double> r = invertRadius(*this, rd);  // inverse of eq. 6.3
   if (!r) return std::nullopt;

@@ -357,31 +357,6 @@ cv::Mat textureFromImage(const cv::Mat& image) {
   return result;
 }
 
-void EventModelConfig::validate() const {
-  require(std::isfinite(contrast_threshold_on) && contrast_threshold_on > 0.0,
-          "EventModelConfig: contrast_threshold_on must be positive");
-  require(std::isfinite(contrast_threshold_off) && contrast_threshold_off > 0.0,
-          "EventModelConfig: contrast_threshold_off must be positive");
-  require(std::isfinite(threshold_mismatch_sigma) && threshold_mismatch_sigma >= 0.0,
-          "EventModelConfig: threshold_mismatch_sigma must be >= 0");
-  require(std::isfinite(min_contrast_threshold) && min_contrast_threshold > 0.0,
-          "EventModelConfig: min_contrast_threshold must be positive");
-  require(std::isfinite(refractory_period_us) && refractory_period_us >= 0.0,
-          "EventModelConfig: refractory_period_us must be >= 0");
-  require(std::isfinite(noise_rate_hz_per_pixel) && noise_rate_hz_per_pixel >= 0.0,
-          "EventModelConfig: noise_rate_hz_per_pixel must be >= 0");
-  require(std::isfinite(noise_rate_log_sigma) && noise_rate_log_sigma >= 0.0 &&
-              noise_rate_log_sigma <= 5.0,
-          "EventModelConfig: noise_rate_log_sigma must be in [0, 5]");
-  require(
-      std::isfinite(hot_pixel_fraction) && hot_pixel_fraction >= 0.0 && hot_pixel_fraction <= 1.0,
-      "EventModelConfig: hot_pixel_fraction must be in [0, 1]");
-  require(std::isfinite(hot_pixel_rate_hz) && hot_pixel_rate_hz >= 0.0,
-          "EventModelConfig: hot_pixel_rate_hz must be >= 0");
-  require(std::isfinite(log_epsilon) && log_epsilon > 0.0,
-          "EventModelConfig: log_epsilon must be positive");
-}
-
 void SimulatorConfig::validate() const {
   camera.validate();
   events.validate();
@@ -440,47 +415,24 @@ SimulationResult EventSimulator::simulate(const Scene& scene, const Trajectory& 
 struct EventStream::State {
   State(const SimulatorConfig& c, const Scene& scene, const Eigen::Isometry3d& start_pose,
         double t_s)
-      : config(c), renderer(config, scene, start_pose), pose(start_pose), t(t_s) {}
+      : config(c),
+        renderer(config, scene, start_pose),
+        generator(config.events, config.camera.width, config.camera.height),
+        pose(start_pose),
+        t(t_s) {}
 
   SimulatorConfig config;
   Renderer renderer;
+  EventGenerator generator;
   Eigen::Isometry3d pose;
   double t = 0.0;
-  std::vector<float> threshold_on;
-  std::vector<float> threshold_off;
   std::vector<float> intensity;
-  std::vector<float> log_previous;
-  std::vector<float> log_current;
-  std::vector<float> reference;
-  std::vector<double> last_event_s;
-  std::mt19937_64 noise_rng;
-  std::uniform_real_distribution<double> uniform{0.0, 1.0};
-  std::exponential_distribution<double> noise_gap;
-  std::uniform_int_distribution<std::size_t> noise_pixel;
-  double noise_rate_total = 0.0;
-  std::vector<double> noise_rate_cumulative;  // empty: uniform
-  double next_noise_s = kInfinity;
   std::vector<Eigen::Vector3d> probe_rays;  // sensor corners and centre: step-size control
   EventVector step_events;
   std::vector<std::uint8_t> step_labels;
-  // Events with their labels, sorted together; the order is the one std::sort gives the events
-  // alone (same comparisons on the same sequence).
-  struct LabelledEvent {
-    Event event;
-    std::uint8_t noise;
-  };
-  std::vector<LabelledEvent> step_sorted;
   std::size_t signal_events = 0;
   std::size_t noise_events = 0;
   std::size_t render_steps = 0;
-
-  std::size_t drawNoisePixel() {
-    if (noise_rate_cumulative.empty()) return noise_pixel(noise_rng);
-    const double u = uniform(noise_rng) * noise_rate_total;
-    const auto it = std::upper_bound(noise_rate_cumulative.begin(), noise_rate_cumulative.end(), u);
-    return std::min<std::size_t>(noise_rate_cumulative.size() - 1,
-                                 static_cast<std::size_t>(it - noise_rate_cumulative.begin()));
-  }
 };
 
 EventStream::EventStream(const SimulatorConfig& config, const Scene& scene,
@@ -492,65 +444,8 @@ EventStream::EventStream(const SimulatorConfig& config, const Scene& scene,
   state_ = std::make_unique<State>(config, scene, start_pose, t_s);
   State& st = *state_;
   const CameraModel& camera = st.config.camera;
-  const EventModelConfig& model = st.config.events;
-  const std::size_t pixel_count = static_cast<std::size_t>(camera.width) * camera.height;
-
-  // Independent streams for the fixed pattern (thresholds, initial phase) and the noise, so
-  // that changing the noise rate does not change the thresholds.
-  std::mt19937_64 pattern_rng(model.seed);
-  st.noise_rng.seed(model.seed ^ 0x9e3779b97f4a7c15ULL);
-  std::normal_distribution<double> mismatch(0.0, 1.0);
-
-  st.threshold_on.resize(pixel_count);
-  st.threshold_off.resize(pixel_count);
-  for (std::size_t i = 0; i < pixel_count; ++i) {
-    st.threshold_on[i] = static_cast<float>(std::max(
-        model.min_contrast_threshold,
-        model.contrast_threshold_on + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
-    st.threshold_off[i] = static_cast<float>(std::max(
-        model.min_contrast_threshold,
-        model.contrast_threshold_off + model.threshold_mismatch_sigma * mismatch(pattern_rng)));
-  }
-
-  st.log_previous.resize(pixel_count);
-  st.log_current.resize(pixel_count);
-  st.reference.resize(pixel_count);
-  st.last_event_s.assign(pixel_count, -kInfinity);
-  const float epsilon = static_cast<float>(model.log_epsilon);
   st.renderer.render(st.pose, st.intensity);
-  for (std::size_t i = 0; i < pixel_count; ++i) {
-    st.log_previous[i] = std::log(st.intensity[i] + epsilon);
-    st.reference[i] = st.log_previous[i];
-    if (model.randomize_initial_reference) {
-      // Reference uniformly inside (L - C_on, L + C_off): no pending crossing, random phase.
-      st.reference[i] +=
-          static_cast<float>(-st.threshold_on[i] +
-                             st.uniform(pattern_rng) * (st.threshold_on[i] + st.threshold_off[i]));
-    }
-  }
-
-  // Background noise: one Poisson process over the sensor at the total rate, each event at a
-  // pixel drawn with probability proportional to the pixel's rate. Equal rates (no spread, no
-  // hot pixels) draw the pixel uniformly.
-  st.noise_rate_total = model.noise_rate_hz_per_pixel * static_cast<double>(pixel_count);
-  if (model.noise_rate_log_sigma > 0.0 || model.hot_pixel_fraction > 0.0) {
-    std::mt19937_64 rate_rng(model.seed ^ 0x5851f42d4c957f2dULL);
-    std::normal_distribution<double> log_rate(
-        -0.5 * model.noise_rate_log_sigma * model.noise_rate_log_sigma, model.noise_rate_log_sigma);
-    st.noise_rate_cumulative.resize(pixel_count);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < pixel_count; ++i) {
-      const double spread = model.noise_rate_log_sigma > 0.0 ? std::exp(log_rate(rate_rng)) : 1.0;
-      const bool hot = st.uniform(rate_rng) < model.hot_pixel_fraction;
-      sum += hot ? model.hot_pixel_rate_hz : model.noise_rate_hz_per_pixel * spread;
-      st.noise_rate_cumulative[i] = sum;
-    }
-    st.noise_rate_total = sum;
-  }
-  st.noise_gap =
-      std::exponential_distribution<double>(st.noise_rate_total > 0.0 ? st.noise_rate_total : 1.0);
-  st.noise_pixel = std::uniform_int_distribution<std::size_t>(0, pixel_count - 1);
-  st.next_noise_s = st.noise_rate_total > 0.0 ? t_s + st.noise_gap(st.noise_rng) : kInfinity;
+  st.generator.start(st.intensity, t_s);
 
   const std::vector<Eigen::Vector2d> probe_pixels = {{0.0, 0.0},
                                                      {camera.width - 1.0, 0.0},
@@ -605,11 +500,6 @@ void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink&
   require(static_cast<bool>(pose_at) && static_cast<bool>(sink),
           "EventStream::advance: no pose function or sink");
   const CameraModel& camera = st.config.camera;
-  const EventModelConfig& model = st.config.events;
-  const int width = camera.width;
-  const std::size_t pixel_count = static_cast<std::size_t>(camera.width) * camera.height;
-  const float epsilon = static_cast<float>(model.log_epsilon);
-  const double refractory_s = model.refractory_period_us * 1e-6;
   const double base_step_s = 1.0 / st.config.render_rate_hz;
   const auto poseAt = [&pose_at](double t) {
     const Eigen::Isometry3d p = pose_at(t);
@@ -652,74 +542,15 @@ void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink&
 
     st.renderer.render(next_pose, st.intensity);
     ++st.render_steps;
-    EventVector& step_events = st.step_events;
-    step_events.clear();
-    const double dt = t1 - t0;
-    for (std::size_t i = 0; i < pixel_count; ++i) {
-      const float l0 = st.log_previous[i];
-      const float l1 = std::log(st.intensity[i] + epsilon);
-      st.log_current[i] = l1;
-      float ref = st.reference[i];
-      const float c_on = st.threshold_on[i];
-      const float c_off = st.threshold_off[i];
-      if (l1 - ref < c_on && ref - l1 < c_off) continue;
-      const float change = l1 - l0;
-      const bool on = l1 > ref;
-      const float c = on ? c_on : c_off;
-      const float direction = on ? 1.0f : -1.0f;
-      // Each crossed level ref +- k c gives one event at the linearly interpolated time.
-      while (on ? (l1 - ref >= c) : (ref - l1 >= c)) {
-        ref += direction * c;
-        double fraction = change != 0.0f ? static_cast<double>(ref - l0) / change : 1.0;
-        fraction = std::clamp(fraction, 0.0, 1.0);
-        const double t_event = t0 + fraction * dt;
-        if (t_event - st.last_event_s[i] >= refractory_s) {
-          st.last_event_s[i] = t_event;
-          Event event;
-          event.t_us = std::llround(t_event * 1e6);
-          event.x = static_cast<std::uint16_t>(i % width);
-          event.y = static_cast<std::uint16_t>(i / width);
-          event.polarity = on;
-          step_events.push_back(event);
-        }
-      }
-      st.reference[i] = ref;
-    }
-    st.signal_events += step_events.size();
-    const std::size_t step_signal = step_events.size();
-    while (st.next_noise_s < t1) {
-      const std::size_t i = st.drawNoisePixel();
-      Event event;
-      event.t_us = std::llround(st.next_noise_s * 1e6);
-      event.x = static_cast<std::uint16_t>(i % width);
-      event.y = static_cast<std::uint16_t>(i / width);
-      event.polarity = st.uniform(st.noise_rng) < 0.5;
-      step_events.push_back(event);
-      ++st.noise_events;
-      st.next_noise_s += st.noise_gap(st.noise_rng);
-    }
-    st.step_sorted.resize(step_events.size());
-    for (std::size_t k = 0; k < step_events.size(); ++k) {
-      st.step_sorted[k] = {step_events[k], static_cast<std::uint8_t>(k >= step_signal)};
-    }
-    std::sort(st.step_sorted.begin(), st.step_sorted.end(),
-              [](const State::LabelledEvent& la, const State::LabelledEvent& lb) {
-                const Event& a = la.event;
-                const Event& b = lb.event;
-                if (a.t_us != b.t_us) return a.t_us < b.t_us;
-                if (a.y != b.y) return a.y < b.y;
-                return a.x < b.x;
-              });
-    st.step_labels.resize(st.step_sorted.size());
-    for (std::size_t k = 0; k < st.step_sorted.size(); ++k) {
-      step_events[k] = st.step_sorted[k].event;
-      st.step_labels[k] = st.step_sorted[k].noise;
-    }
-    st.log_previous.swap(st.log_current);
+    st.step_events.clear();
+    st.step_labels.clear();
+    const std::size_t signal = st.generator.step(st.intensity, t1, st.step_events, &st.step_labels);
+    st.signal_events += signal;
+    st.noise_events += st.step_events.size() - signal;
     st.pose = next_pose;
     st.t = t1;
     t0 = t1;
-    sink(step_events, st.step_labels, t1);
+    sink(st.step_events, st.step_labels, t1);
   }
 }
 

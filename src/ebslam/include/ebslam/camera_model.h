@@ -20,6 +20,9 @@ namespace ebslam {
 enum class DistortionModel {
   kDistortEq63,    ///< L applied to the undistorted radius gives the distorted position
   kUndistortEq83,  ///< L applied to the distorted (event) radius gives the undistorted position
+  /// Eq. 8.1 as printed (the D-eDVS' eDVS model): e = c + s / L(|s|) with s = e_u - c, the
+  /// undistorted offset; closed form both ways (the inverse solves a quadratic in the radius).
+  kDivideEq81,
 };
 
 /// Pinhole projection (eq. 6.1) followed by the two-parameter radial distortion of eq. 6.3:

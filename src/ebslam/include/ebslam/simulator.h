@@ -31,6 +31,7 @@
 
 #include "ebslam/camera_model.h"
 #include "ebslam/event.h"
+#include "ebslam/event_model.h"
 #include "ebslam/trajectory.h"
 
 namespace ebslam {
@@ -51,6 +52,9 @@ struct TexturedPlane {
   cv::Mat texture;
   double metres_per_texel = 0.01;  ///< texel edge length on the plane [m]
   bool repeat = true;              ///< tile the texture over the extent
+  /// Reflectance colour (linear RGB factors on the intensity) for colour cameras; event
+  /// sensors see the intensity texture alone.
+  Eigen::Vector3f colour = Eigen::Vector3f::Ones();
 
   /// Throws std::invalid_argument with the reason if the plane is unusable (empty or wrongly
   /// typed texture, non-positive sizes, non-finite pose).
@@ -67,47 +71,6 @@ struct Scene {
 /// Converts an 8-bit or 16-bit grey or BGR image, or a float image, to the texture format
 /// (CV_32FC1, 8-bit values / 255). Throws std::invalid_argument for an empty image.
 cv::Mat textureFromImage(const cv::Mat& image);
-
-/// Parameters of the per-pixel event generation model.
-struct EventModelConfig {
-  /// Mean ON and OFF contrast threshold C in natural-log intensity units. Not given in the
-  /// thesis; 0.15 (a 16 % brightness change) is a typical DVS128 / eDVS bias setting.
-  double contrast_threshold_on = 0.15;
-  double contrast_threshold_off = 0.15;
-  /// Standard deviation of the per-pixel threshold mismatch [log units]; the DVS128 paper
-  /// (Lichtsteiner et al. 2008) reports about 2.1 % contrast mismatch.
-  double threshold_mismatch_sigma = 0.021;
-  /// Lower bound of any pixel's threshold after mismatch [log units].
-  double min_contrast_threshold = 0.01;
-  /// Dead time after an event [us]; the eDVS' is about 100 us (thesis table 6.2). Crossings
-  /// during it emit no event but still move the reference level.
-  double refractory_period_us = 100.0;
-  /// Background activity per pixel [Hz], the mean over the pixels; random pixel, polarity and
-  /// time (Poisson process). Real DVS128-class sensors show 0.1-1 Hz and more (it rises with
-  /// temperature and in dim light).
-  double noise_rate_hz_per_pixel = 0.1;
-  /// Spread of the background rate across pixels: standard deviation of the natural log of a
-  /// pixel's rate (log-normal, scaled so that the mean stays noise_rate_hz_per_pixel). Measured
-  /// DVS background rates vary by about an order of magnitude between pixels (sigma ~ 1);
-  /// 0 = every pixel at the same rate.
-  double noise_rate_log_sigma = 0.0;
-  /// Fraction of hot pixels in [0, 1]: pixels (chosen at random) that fire noise at
-  /// hot_pixel_rate_hz instead of their background rate.
-  double hot_pixel_fraction = 0.0;
-  double hot_pixel_rate_hz = 50.0;  ///< noise rate of a hot pixel [Hz]
-  /// Added to the intensity before the logarithm (dark current); bounds the log contrast of
-  /// black texels.
-  double log_epsilon = 0.02;
-  /// Start every pixel's reference level at a uniformly random phase inside its threshold band
-  /// (as after an unknown history) instead of at its first intensity.
-  bool randomize_initial_reference = true;
-  /// Seeds threshold mismatch, initial references, noise and the per-pixel noise rates
-  /// (separate streams: changing the noise settings leaves the fixed pattern unchanged).
-  std::uint64_t seed = 1;
-
-  /// Throws std::invalid_argument with the reason for out-of-range values.
-  void validate() const;
-};
 
 /// Parameters of rendering and time stepping.
 struct SimulatorConfig {

@@ -1,0 +1,820 @@
+#include "ebslam/dedvs_simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+namespace ebslam {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr float kNoHit = std::numeric_limits<float>::infinity();
+
+// Small, fast generator for the per-pixel noise of the depth camera (splitmix64; the frames'
+// noise does not need a long period).
+struct FastRng {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
+  // Standard normal (Box-Muller).
+  double normal() {
+    const double u1 = 1.0 - uniform();
+    const double u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+  }
+  // Approximately normal, mean 0, sigma 1 (sum of four uniforms): for colour noise.
+  double roughNormal() {
+    const std::uint64_t bits = next();
+    double sum = 0.0;
+    for (int k = 0; k < 4; ++k) sum += static_cast<double>((bits >> (16 * k)) & 0xffff) / 65535.0;
+    return (sum - 2.0) * 1.7320508075688772;
+  }
+};
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw std::invalid_argument(message);
+}
+
+Eigen::Isometry3d toIsometry(const StampedPose& pose) {
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.linear() = pose.orientation.normalized().toRotationMatrix();
+  transform.translation() = pose.position;
+  return transform;
+}
+
+StampedPose toStamped(double t_s, const Eigen::Isometry3d& pose) {
+  StampedPose stamped;
+  stamped.t_s = t_s;
+  stamped.position = pose.translation();
+  stamped.orientation = Eigen::Quaterniond(pose.linear()).normalized();
+  return stamped;
+}
+
+// The viewing rays of a camera (z = 1 in its frame) in tiles of 16 x 16 pixels, each tile with
+// the bounding box of its rays' (x, y): planes are only tested against tiles whose box meets
+// the plane's image.
+struct RayGrid {
+  int width = 0;
+  int height = 0;
+  double focal_px = 1.0;          // for the pixel footprint
+  std::vector<float> x, y, norm;  // per pixel, row-major; norm = |(x, y, 1)|
+  struct Tile {
+    int x0, y0, x1, y1;  // pixel range [x0, x1) x [y0, y1)
+    float min_x, max_x, min_y, max_y;
+  };
+  std::vector<Tile> tiles;
+
+  template <typename RayOf>
+  void build(int w, int h, double focal, RayOf ray_of) {
+    width = w;
+    height = h;
+    focal_px = focal;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    x.resize(n);
+    y.resize(n);
+    norm.resize(n);
+    for (int row = 0; row < h; ++row) {
+      for (int col = 0; col < w; ++col) {
+        const Eigen::Vector2d xy = ray_of(col, row);
+        const std::size_t i = static_cast<std::size_t>(row) * w + col;
+        x[i] = static_cast<float>(xy.x());
+        y[i] = static_cast<float>(xy.y());
+        norm[i] = static_cast<float>(std::sqrt(xy.squaredNorm() + 1.0));
+      }
+    }
+    constexpr int kTile = 16;
+    for (int ty = 0; ty < h; ty += kTile) {
+      for (int tx = 0; tx < w; tx += kTile) {
+        Tile tile{tx,
+                  ty,
+                  std::min(w, tx + kTile),
+                  std::min(h, ty + kTile),
+                  std::numeric_limits<float>::max(),
+                  -std::numeric_limits<float>::max(),
+                  std::numeric_limits<float>::max(),
+                  -std::numeric_limits<float>::max()};
+        for (int row = tile.y0; row < tile.y1; ++row) {
+          for (int col = tile.x0; col < tile.x1; ++col) {
+            const std::size_t i = static_cast<std::size_t>(row) * w + col;
+            tile.min_x = std::min(tile.min_x, x[i]);
+            tile.max_x = std::max(tile.max_x, x[i]);
+            tile.min_y = std::min(tile.min_y, y[i]);
+            tile.max_y = std::max(tile.max_y, y[i]);
+          }
+        }
+        tiles.push_back(tile);
+      }
+    }
+  }
+};
+
+// A plane with its texture pyramid; geometry in the world (updated for moving planes).
+struct PreparedPlane {
+  std::vector<cv::Mat> pyramid;   // CV_32FC1; level k has 2^-k the resolution
+  double texels_per_metre = 1.0;  // at level 0
+  Eigen::Vector3d origin, axis_u, axis_v, normal;
+  double size_u = 0.0, size_v = 0.0;
+  Eigen::Vector3f colour = Eigen::Vector3f::Ones();
+  bool repeat = true;
+
+  void setPose(const Eigen::Isometry3d& pose) {
+    origin = pose.translation();
+    axis_u = pose.linear().col(0).normalized();
+    axis_v = pose.linear().col(1).normalized();
+    normal = pose.linear().col(2).normalized();
+  }
+};
+
+// Per-pixel hits of one render: ray parameter lambda (= z in the camera frame, rays have
+// z = 1), plane index and plane coordinates [m].
+struct Hits {
+  std::vector<float> z;
+  std::vector<int> plane;
+  std::vector<float> u, v;
+  void reset(std::size_t n) {
+    z.assign(n, kNoHit);
+    plane.assign(n, -1);
+    u.resize(n);
+    v.resize(n);
+  }
+};
+
+class RoomRenderer {
+ public:
+  explicit RoomRenderer(const Scene& scene) {
+    for (const TexturedPlane& plane : scene.planes) {
+      PreparedPlane prepared;
+      prepared.setPose(plane.pose);
+      prepared.size_u = plane.size_m.x();
+      prepared.size_v = plane.size_m.y();
+      prepared.colour = plane.colour;
+      prepared.repeat = plane.repeat;
+      prepared.texels_per_metre = 1.0 / plane.metres_per_texel;
+      cv::Mat level = textureFromImage(plane.texture);
+      prepared.pyramid.push_back(level);
+      while (level.cols >= 8 && level.rows >= 8 && prepared.pyramid.size() < 12) {
+        cv::Mat next;
+        cv::pyrDown(level, next);
+        prepared.pyramid.push_back(next);
+        level = next;
+      }
+      planes_.push_back(std::move(prepared));
+    }
+    background_ = static_cast<float>(scene.background_intensity);
+  }
+
+  std::vector<PreparedPlane>& planes() { return planes_; }
+
+  // Nearest hit per pixel of `grid` seen from `camera` (camera -> world).
+  void trace(const Eigen::Isometry3d& camera, const RayGrid& grid, Hits& hits) const {
+    const std::size_t n = grid.x.size();
+    hits.reset(n);
+    const Eigen::Matrix3d rt = camera.linear().transpose();
+    const Eigen::Vector3d t = camera.translation();
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      const PreparedPlane& p = planes_[k];
+      // Image of the plane's rectangle: corners into the camera frame, clipped at z = 0.01 m,
+      // bounding box of x / z, y / z.
+      const Eigen::Vector3d corners[4] = {p.origin, p.origin + p.size_u * p.axis_u,
+                                          p.origin + p.size_u * p.axis_u + p.size_v * p.axis_v,
+                                          p.origin + p.size_v * p.axis_v};
+      Eigen::Vector3d in_camera[4];
+      for (int c = 0; c < 4; ++c) in_camera[c] = rt * (corners[c] - t);
+      constexpr double kNear = 0.01;
+      double min_x = std::numeric_limits<double>::max(), max_x = -min_x;
+      double min_y = min_x, max_y = -min_x;
+      bool any = false;
+      auto include = [&](const Eigen::Vector3d& q) {
+        min_x = std::min(min_x, q.x() / q.z());
+        max_x = std::max(max_x, q.x() / q.z());
+        min_y = std::min(min_y, q.y() / q.z());
+        max_y = std::max(max_y, q.y() / q.z());
+        any = true;
+      };
+      for (int c = 0; c < 4; ++c) {
+        const Eigen::Vector3d& a = in_camera[c];
+        const Eigen::Vector3d& b = in_camera[(c + 1) % 4];
+        if (a.z() >= kNear) include(a);
+        if ((a.z() >= kNear) != (b.z() >= kNear)) {
+          const double s = (kNear - a.z()) / (b.z() - a.z());
+          include(a + s * (b - a));
+        }
+      }
+      if (!any) continue;
+      const Eigen::Vector3d n_c = rt * p.normal;
+      const double h = p.normal.dot(p.origin - t);
+      if (std::abs(h) < 1e-9) continue;  // camera in the plane: sees it edge-on
+      const Eigen::Vector3d au_c = rt * p.axis_u;
+      const Eigen::Vector3d av_c = rt * p.axis_v;
+      const double cu = p.axis_u.dot(t - p.origin);
+      const double cv_ = p.axis_v.dot(t - p.origin);
+      const float nx = static_cast<float>(n_c.x()), ny = static_cast<float>(n_c.y()),
+                  nz = static_cast<float>(n_c.z());
+      const float ux = static_cast<float>(au_c.x()), uy = static_cast<float>(au_c.y()),
+                  uz = static_cast<float>(au_c.z());
+      const float vx = static_cast<float>(av_c.x()), vy = static_cast<float>(av_c.y()),
+                  vz = static_cast<float>(av_c.z());
+      const float hf = static_cast<float>(h), cuf = static_cast<float>(cu),
+                  cvf = static_cast<float>(cv_);
+      const float su = static_cast<float>(p.size_u), sv = static_cast<float>(p.size_v);
+      const int plane_index = static_cast<int>(k);
+      for (const RayGrid::Tile& tile : grid.tiles) {
+        if (tile.max_x < min_x || tile.min_x > max_x || tile.max_y < min_y || tile.min_y > max_y) {
+          continue;
+        }
+        for (int row = tile.y0; row < tile.y1; ++row) {
+          const std::size_t base = static_cast<std::size_t>(row) * grid.width;
+          for (std::size_t i = base + tile.x0; i < base + tile.x1; ++i) {
+            const float x = grid.x[i], y = grid.y[i];
+            const float den = nx * x + ny * y + nz;
+            const float lambda = hf / den;
+            if (!(lambda > 0.0f && lambda < hits.z[i])) continue;
+            const float u = cuf + lambda * (ux * x + uy * y + uz);
+            const float v = cvf + lambda * (vx * x + vy * y + vz);
+            if (u < 0.0f || v < 0.0f || u > su || v > sv) continue;
+            hits.z[i] = lambda;
+            hits.plane[i] = plane_index;
+            hits.u[i] = u;
+            hits.v[i] = v;
+          }
+        }
+      }
+    }
+  }
+
+  // Intensity per pixel from the hits (texture at the footprint's mip level, trilinear).
+  void shade(const Eigen::Isometry3d& camera, const RayGrid& grid, const Hits& hits,
+             std::vector<float>& intensity) const {
+    const std::size_t n = grid.x.size();
+    intensity.resize(n);
+    const Eigen::Matrix3d rt = camera.linear().transpose();
+    normals_.resize(planes_.size());
+    for (std::size_t k = 0; k < planes_.size(); ++k) {
+      normals_[k] = (rt * planes_[k].normal).cast<float>();
+    }
+    const float inv_focal = static_cast<float>(1.0 / grid.focal_px);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int k = hits.plane[i];
+      if (k < 0) {
+        intensity[i] = background_;
+        continue;
+      }
+      const PreparedPlane& p = planes_[static_cast<std::size_t>(k)];
+      const Eigen::Vector3f& n_c = normals_[static_cast<std::size_t>(k)];
+      const float cos_incidence = std::max(
+          0.05f, std::abs(n_c.x() * grid.x[i] + n_c.y() * grid.y[i] + n_c.z()) / grid.norm[i]);
+      // Footprint [texels at level 0]: distance / f across the ray, stretched by the
+      // incidence along the slant (geometric mean of the two axes).
+      const float footprint = hits.z[i] * grid.norm[i] * inv_focal / std::sqrt(cos_incidence) *
+                              static_cast<float>(p.texels_per_metre);
+      const float level = std::clamp(std::log2(std::max(footprint, 1e-6f)), 0.0f,
+                                     static_cast<float>(p.pyramid.size() - 1));
+      const int l0 = static_cast<int>(level);
+      const int l1 = std::min<int>(l0 + 1, static_cast<int>(p.pyramid.size()) - 1);
+      const float a = level - static_cast<float>(l0);
+      const float s0 = sample(p, l0, hits.u[i], hits.v[i]);
+      const float s1 = a > 0.0f ? sample(p, l1, hits.u[i], hits.v[i]) : s0;
+      intensity[i] = s0 + a * (s1 - s0);
+    }
+  }
+
+  // Plane index and plane coordinates -> texture value at a mip level (bilinear, tiled).
+  float sample(const PreparedPlane& p, int level, float u_m, float v_m) const {
+    const cv::Mat& texture = p.pyramid[static_cast<std::size_t>(level)];
+    const float scale = static_cast<float>(p.texels_per_metre) / static_cast<float>(1 << level);
+    const float x = u_m * scale - 0.5f;
+    const float y = v_m * scale - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float ax = x - fx, ay = y - fy;
+    int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+    int x1 = x0 + 1, y1 = y0 + 1;
+    const int cols = texture.cols, rows = texture.rows;
+    if (p.repeat && (cols & (cols - 1)) == 0 && (rows & (rows - 1)) == 0) {
+      x0 &= cols - 1;  // power-of-two sizes (two's complement: also for negative x0)
+      y0 &= rows - 1;
+      x1 = (x0 + 1) & (cols - 1);
+      y1 = (y0 + 1) & (rows - 1);
+    } else if (p.repeat) {
+      x0 = ((x0 % cols) + cols) % cols;
+      y0 = ((y0 % rows) + rows) % rows;
+      x1 = x0 + 1 == cols ? 0 : x0 + 1;
+      y1 = y0 + 1 == rows ? 0 : y0 + 1;
+    } else {
+      x0 = std::clamp(x0, 0, cols - 1);
+      x1 = std::clamp(x1, 0, cols - 1);
+      y0 = std::clamp(y0, 0, rows - 1);
+      y1 = std::clamp(y1, 0, rows - 1);
+    }
+    const float* r0 = texture.ptr<float>(y0);
+    const float* r1 = texture.ptr<float>(y1);
+    const float top = r0[x0] + ax * (r0[x1] - r0[x0]);
+    const float bottom = r1[x0] + ax * (r1[x1] - r1[x0]);
+    return top + ay * (bottom - top);
+  }
+
+  float background() const { return background_; }
+
+ private:
+  std::vector<PreparedPlane> planes_;
+  float background_ = 0.5f;
+  mutable std::vector<Eigen::Vector3f> normals_;
+};
+
+void validateScene(const Scene& scene) {
+  require(std::isfinite(scene.background_intensity) && scene.background_intensity >= 0.0,
+          "Scene: background_intensity must be finite and >= 0");
+  for (std::size_t i = 0; i < scene.planes.size(); ++i) {
+    try {
+      scene.planes[i].validate();
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument("Scene plane " + std::to_string(i) + ": " + error.what());
+    }
+  }
+}
+
+// True if pixel i of a w x h depth buffer has a 4-neighbour at a relatively different depth
+// (or a neighbour without a hit while it has one).
+bool atDepthEdge(const std::vector<float>& z, int w, int h, std::size_t i, float ratio) {
+  const int x = static_cast<int>(i % static_cast<std::size_t>(w));
+  const int y = static_cast<int>(i / static_cast<std::size_t>(w));
+  const float zi = z[i];
+  auto differs = [&](std::size_t j) {
+    const float zj = z[j];
+    if (std::isinf(zi) != std::isinf(zj)) return true;
+    if (std::isinf(zi)) return false;
+    return std::abs(zi - zj) > ratio * std::min(zi, zj);
+  };
+  return (x > 0 && differs(i - 1)) || (x + 1 < w && differs(i + 1)) ||
+         (y > 0 && differs(i - static_cast<std::size_t>(w))) ||
+         (y + 1 < h && differs(i + static_cast<std::size_t>(w)));
+}
+
+}  // namespace
+
+void PinholeCamera::validate() const {
+  require(width > 0 && height > 0 && width <= 8192 && height <= 8192,
+          "PinholeCamera: width and height must lie in [1, 8192]");
+  require(std::isfinite(fx) && fx > 0.0 && std::isfinite(fy) && fy > 0.0,
+          "PinholeCamera: focal lengths must be positive");
+  require(std::isfinite(cx) && std::isfinite(cy), "PinholeCamera: principal point not finite");
+}
+
+PinholeCamera PinholeCamera::scaled(double factor) const {
+  require(std::isfinite(factor) && factor > 0.0, "PinholeCamera::scaled: factor must be > 0");
+  PinholeCamera result = *this;
+  result.width = static_cast<int>(std::lround(width * factor));
+  result.height = static_cast<int>(std::lround(height * factor));
+  result.fx = fx * factor;
+  result.fy = fy * factor;
+  result.cx = (cx + 0.5) * factor - 0.5;
+  result.cy = (cy + 0.5) * factor - 0.5;
+  return result;
+}
+
+void DepthCameraConfig::validate() const {
+  camera.validate();
+  require(std::isfinite(frame_rate_hz) && frame_rate_hz > 0.0 && frame_rate_hz <= 1000.0,
+          "DepthCameraConfig: frame_rate_hz must lie in (0, 1000]");
+  require(std::isfinite(min_range_m) && min_range_m > 0.0 && max_range_m > min_range_m &&
+              std::isfinite(max_range_m) && max_range_m < 65.0,
+          "DepthCameraConfig: need 0 < min_range_m < max_range_m < 65 m");
+  require(std::isfinite(baseline_m) && baseline_m > 0.0 && std::isfinite(ir_focal_px) &&
+              ir_focal_px > 0.0,
+          "DepthCameraConfig: baseline_m and ir_focal_px must be positive");
+  require(subpixel_steps >= 1 && subpixel_steps <= 1024,
+          "DepthCameraConfig: subpixel_steps must lie in [1, 1024]");
+  require(std::isfinite(disparity_noise_px) && disparity_noise_px >= 0.0,
+          "DepthCameraConfig: disparity_noise_px must be >= 0");
+  require(projector_direction.allFinite() && projector_direction.norm() > 0.5,
+          "DepthCameraConfig: projector_direction must be a unit vector");
+  require(std::isfinite(max_incidence_deg) && max_incidence_deg > 0.0 && max_incidence_deg <= 90.0,
+          "DepthCameraConfig: max_incidence_deg must lie in (0, 90]");
+  require(std::isfinite(edge_jump_ratio) && edge_jump_ratio > 0.0,
+          "DepthCameraConfig: edge_jump_ratio must be positive");
+  require(edge_hole_probability >= 0.0 && edge_hole_probability <= 1.0,
+          "DepthCameraConfig: edge_hole_probability must lie in [0, 1]");
+  require(std::isfinite(clock_offset_s), "DepthCameraConfig: clock_offset_s must be finite");
+  require(std::isfinite(colour_noise_sigma) && colour_noise_sigma >= 0.0,
+          "DepthCameraConfig: colour_noise_sigma must be >= 0");
+}
+
+CameraModel DedvsSimulatorConfig::defaultEdvsCamera() {
+  CameraModel camera;
+  camera.width = 128;
+  camera.height = 128;
+  camera.focal_px = 154.0;
+  camera.principal_point = Eigen::Vector2d(64.7, 62.4);
+  camera.kappa1 = 6e-4;
+  camera.kappa2 = 2e-6;
+  camera.distortion_model = DistortionModel::kDivideEq81;
+  return camera;
+}
+
+Eigen::Isometry3d DedvsSimulatorConfig::defaultDepthFromEdvs() {
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.linear() = (Eigen::AngleAxisd(0.8 * kPi / 180.0, Eigen::Vector3d::UnitX()) *
+                        Eigen::AngleAxisd(-1.2 * kPi / 180.0, Eigen::Vector3d::UnitY()) *
+                        Eigen::AngleAxisd(0.5 * kPi / 180.0, Eigen::Vector3d::UnitZ()))
+                           .toRotationMatrix();
+  transform.translation() = Eigen::Vector3d(0.012, -0.041, 0.004);
+  return transform;
+}
+
+void DedvsSimulatorConfig::validate() const {
+  edvs.validate();
+  events.validate();
+  depth.validate();
+  require(depth_from_edvs.matrix().allFinite(),
+          "DedvsSimulatorConfig: depth_from_edvs is not finite");
+  const Eigen::Matrix3d r = depth_from_edvs.linear();
+  require((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-6,
+          "DedvsSimulatorConfig: depth_from_edvs rotation is not orthonormal");
+  require(std::isfinite(render_rate_hz) && render_rate_hz > 0.0,
+          "DedvsSimulatorConfig: render_rate_hz must be positive");
+  require(std::isfinite(max_step_motion_px) && max_step_motion_px > 0.0,
+          "DedvsSimulatorConfig: max_step_motion_px must be positive");
+  require(std::isfinite(ground_truth_rate_hz) && ground_truth_rate_hz > 0.0,
+          "DedvsSimulatorConfig: ground_truth_rate_hz must be positive");
+  require(std::isfinite(illumination) && illumination > 0.0,
+          "DedvsSimulatorConfig: illumination must be positive");
+}
+
+double depthNoiseSigma(const DepthCameraConfig& config, double z_m) {
+  const double q = 1.0 / config.subpixel_steps;
+  return std::sqrt(config.disparity_noise_px * config.disparity_noise_px + q * q / 12.0) * z_m *
+         z_m / (config.ir_focal_px * config.baseline_m);
+}
+
+namespace {
+
+// Everything one simulate() call needs.
+class Session {
+ public:
+  Session(const DedvsSimulatorConfig& config, const Scene& scene)
+      : config_(config), renderer_(scene) {
+    const CameraModel& edvs = config.edvs;
+    edvs_grid_.build(edvs.width, edvs.height, edvs.focal_px, [&](int col, int row) {
+      const std::optional<Eigen::Vector3d> ray = edvs.backprojectRay(Eigen::Vector2d(col, row));
+      return ray ? Eigen::Vector2d(ray->head<2>()) : Eigen::Vector2d(0.0, 0.0);
+    });
+    const PinholeCamera& depth = config.depth.camera;
+    depth_grid_.build(depth.width, depth.height, depth.fx, [&](int col, int row) {
+      return Eigen::Vector2d((col - depth.cx) / depth.fx, (row - depth.cy) / depth.fy);
+    });
+  }
+
+  RoomRenderer& renderer() { return renderer_; }
+  const RayGrid& edvsGrid() const { return edvs_grid_; }
+
+  void movePlanes(const std::vector<MovingPlane>& moving, double t_s) {
+    for (const MovingPlane& m : moving) {
+      renderer_.planes()[static_cast<std::size_t>(m.plane_index)].setPose(
+          toIsometry(interpolatePose(m.pose, t_s)));
+    }
+  }
+
+  // eDVS intensity and hits at a rig pose; LEDs added as spots (lens point spread, sigma
+  // 0.6 px or the disc's image) when on and not occluded.
+  void renderEdvs(const Eigen::Isometry3d& rig, double t_s, const std::vector<BlinkingLed>& leds,
+                  Hits& hits, std::vector<float>& intensity) {
+    const Eigen::Isometry3d edvs_pose = rig * config_.depth_from_edvs;
+    renderer_.trace(edvs_pose, edvs_grid_, hits);
+    renderer_.shade(edvs_pose, edvs_grid_, hits, intensity);
+    const float illumination = static_cast<float>(config_.illumination);
+    for (float& value : intensity) value *= illumination;
+    for (const BlinkingLed& led : leds) {
+      const double phase = std::fmod((t_s - led.phase_s) * led.frequency_hz, 1.0);
+      if (!((phase < 0.0 ? phase + 1.0 : phase) < 0.5)) continue;
+      Eigen::Vector3d world = led.position;
+      if (led.plane_index >= 0) {
+        const PreparedPlane& p = renderer_.planes()[static_cast<std::size_t>(led.plane_index)];
+        world = p.origin + led.position.x() * p.axis_u + led.position.y() * p.axis_v +
+                led.position.z() * p.normal;
+      }
+      const Eigen::Vector3d in_edvs = edvs_pose.inverse() * world;
+      const std::optional<Eigen::Vector2d> pixel = config_.edvs.project(in_edvs);
+      if (!pixel || !config_.edvs.isInside(*pixel)) continue;
+      const int cx = static_cast<int>(std::lround(pixel->x()));
+      const int cy = static_cast<int>(std::lround(pixel->y()));
+      const std::size_t centre = static_cast<std::size_t>(cy) * config_.edvs.width + cx;
+      if (hits.z[centre] < in_edvs.z() * 0.98 - 0.01) continue;  // occluded
+      const double sigma = std::max(0.6, config_.edvs.focal_px * led.radius_m / in_edvs.z());
+      const int reach = static_cast<int>(std::ceil(3.0 * sigma));
+      for (int y = std::max(0, cy - reach); y <= std::min(config_.edvs.height - 1, cy + reach);
+           ++y) {
+        for (int x = std::max(0, cx - reach); x <= std::min(config_.edvs.width - 1, cx + reach);
+             ++x) {
+          const double d2 = (Eigen::Vector2d(x, y) - *pixel).squaredNorm();
+          intensity[static_cast<std::size_t>(y) * config_.edvs.width + x] +=
+              static_cast<float>(led.on_intensity * std::exp(-0.5 * d2 / (sigma * sigma)));
+        }
+      }
+    }
+  }
+
+  DepthFrame renderDepth(const Eigen::Isometry3d& rig, double t_s, std::uint64_t frame_index) {
+    const DepthCameraConfig& dc = config_.depth;
+    const PinholeCamera& cam = dc.camera;
+    const std::size_t n = depth_grid_.x.size();
+    renderer_.trace(rig, depth_grid_, depth_hits_);
+    renderer_.shade(rig, depth_grid_, depth_hits_, shade_);
+    const Eigen::Vector3d projector_offset = dc.baseline_m * dc.projector_direction.normalized();
+    Eigen::Isometry3d projector = rig;
+    projector.translation() = rig * projector_offset;
+    renderer_.trace(projector, depth_grid_, projector_hits_);
+
+    FastRng rng{config_.seed * 0x100000001b3ULL + frame_index * 0x2545f4914f6cdd1dULL + 7};
+    if (gamma_.empty()) {
+      gamma_.resize(4097);
+      for (std::size_t g = 0; g < gamma_.size(); ++g) {
+        gamma_[g] = static_cast<float>(255.0 * std::pow(g / 4096.0, 1.0 / 2.2));
+      }
+    }
+    DepthFrame frame;
+    frame.t_s = t_s;
+    frame.stamp_s = t_s + dc.clock_offset_s;
+    frame.depth_mm = cv::Mat(cam.height, cam.width, CV_16UC1, cv::Scalar(0));
+    frame.true_depth_m = cv::Mat(cam.height, cam.width, CV_32FC1);
+    frame.colour = cv::Mat(cam.height, cam.width, CV_8UC3);
+    const Eigen::Matrix3d rt = rig.linear().transpose();
+    const double cos_max = std::cos(dc.max_incidence_deg * kPi / 180.0);
+    const double fb = dc.ir_focal_px * dc.baseline_m;
+    const double step = 1.0 / dc.subpixel_steps;
+    for (std::size_t i = 0; i < n; ++i) {
+      const int row = static_cast<int>(i / static_cast<std::size_t>(cam.width));
+      const int col = static_cast<int>(i % static_cast<std::size_t>(cam.width));
+      const float z = depth_hits_.z[i];
+      const int k = depth_hits_.plane[i];
+      frame.true_depth_m.at<float>(row, col) = k >= 0 ? z : std::numeric_limits<float>::quiet_NaN();
+      // Colour (gamma 1/2.2, 8 bit, noise).
+      cv::Vec3b& bgr = frame.colour.at<cv::Vec3b>(row, col);
+      const Eigen::Vector3f colour =
+          k >= 0 ? renderer_.planes()[static_cast<std::size_t>(k)].colour : Eigen::Vector3f::Ones();
+      for (int c = 0; c < 3; ++c) {
+        const float linear = std::clamp(shade_[i] * colour[2 - c], 0.0f, 1.0f);
+        bgr[c] =
+            cv::saturate_cast<std::uint8_t>(gamma_[static_cast<std::size_t>(linear * 4096.0f)] +
+                                            dc.colour_noise_sigma * rng.roughNormal());
+      }
+      if (k < 0) continue;
+      const double noise = rng.normal();
+      const double edge_draw = rng.uniform();
+      const Eigen::Vector3d ray(depth_grid_.x[i], depth_grid_.y[i], 1.0);
+      // Grazing angle.
+      const Eigen::Vector3d n_c = rt * renderer_.planes()[static_cast<std::size_t>(k)].normal;
+      if (std::abs(n_c.dot(ray)) / ray.norm() < cos_max) continue;
+      // Depth edge.
+      if (edge_draw < dc.edge_hole_probability &&
+          atDepthEdge(depth_hits_.z, cam.width, cam.height, i,
+                      static_cast<float>(dc.edge_jump_ratio))) {
+        continue;
+      }
+      // Projector shadow: the point must be the nearest surface seen from the projector.
+      const Eigen::Vector3d point = static_cast<double>(z) * ray;
+      const Eigen::Vector3d from_projector = point - projector_offset;
+      if (from_projector.z() <= 0.0) continue;
+      const int pc =
+          static_cast<int>(std::lround(cam.fx * from_projector.x() / from_projector.z() + cam.cx));
+      const int pr =
+          static_cast<int>(std::lround(cam.fy * from_projector.y() / from_projector.z() + cam.cy));
+      if (pc < 0 || pr < 0 || pc >= cam.width || pr >= cam.height) continue;
+      const float lit_z = projector_hits_.z[static_cast<std::size_t>(pr) * cam.width + pc];
+      if (from_projector.z() > lit_z * 1.01 + 0.005) continue;
+      // Disparity, noise, quantisation.
+      const double disparity = fb / z + dc.disparity_noise_px * noise;
+      const double quantised = std::round(disparity / step) * step;
+      if (quantised <= 0.0) continue;
+      const double measured = fb / quantised;
+      if (measured < dc.min_range_m || measured > dc.max_range_m) continue;
+      frame.depth_mm.at<std::uint16_t>(row, col) =
+          static_cast<std::uint16_t>(std::lround(measured * 1000.0));
+    }
+    return frame;
+  }
+
+ private:
+  const DedvsSimulatorConfig& config_;
+  RoomRenderer renderer_;
+  RayGrid edvs_grid_;
+  RayGrid depth_grid_;
+  Hits depth_hits_;
+  Hits projector_hits_;
+  std::vector<float> shade_;
+  std::vector<float> gamma_;  // linear [0, 1] in 4096 steps -> 8-bit sRGB-like (gamma 2.2)
+};
+
+void validateInputs(const Scene& scene, const Trajectory& trajectory, double t_begin_s,
+                    double t_end_s, const std::vector<BlinkingLed>& leds,
+                    const std::vector<MovingPlane>& moving_planes) {
+  validateScene(scene);
+  require(trajectory.size() >= 2, "DedvsSimulator: the trajectory needs at least two poses");
+  validateTrajectory(trajectory, "DedvsSimulator: rig trajectory");
+  require(std::isfinite(t_begin_s) && std::isfinite(t_end_s) && t_begin_s < t_end_s,
+          "DedvsSimulator: the time range must be finite and non-empty");
+  require(t_begin_s >= trajectory.front().t_s && t_end_s <= trajectory.back().t_s,
+          "DedvsSimulator: the time range lies outside the trajectory");
+  const int planes = static_cast<int>(scene.planes.size());
+  for (const BlinkingLed& led : leds) {
+    require(led.position.allFinite() && led.plane_index < planes,
+            "DedvsSimulator: LED position not finite or plane index out of range");
+    require(std::isfinite(led.frequency_hz) && led.frequency_hz > 0.0 &&
+                std::isfinite(led.on_intensity) && led.on_intensity >= 0.0 &&
+                std::isfinite(led.radius_m) && led.radius_m >= 0.0 && std::isfinite(led.phase_s),
+            "DedvsSimulator: LED frequency, radius, intensity or phase invalid");
+  }
+  for (const MovingPlane& m : moving_planes) {
+    require(m.plane_index >= 0 && m.plane_index < planes,
+            "DedvsSimulator: moving plane index out of range");
+    require(m.pose.size() >= 2, "DedvsSimulator: a moving plane needs at least two poses");
+    validateTrajectory(m.pose, "DedvsSimulator: moving plane");
+    require(m.pose.front().t_s <= t_begin_s && m.pose.back().t_s >= t_end_s,
+            "DedvsSimulator: a moving plane's poses do not cover the time range");
+  }
+}
+
+}  // namespace
+
+DedvsSimulator::DedvsSimulator(const DedvsSimulatorConfig& config) : config_(config) {
+  config_.validate();
+}
+
+void DedvsSimulator::renderEdvs(const Scene& scene, const Eigen::Isometry3d& rig_pose,
+                                cv::Mat& intensity, cv::Mat& depth_m) const {
+  validateScene(scene);
+  require(rig_pose.matrix().allFinite(), "renderEdvs: rig pose is not finite");
+  Session session(config_, scene);
+  Hits hits;
+  std::vector<float> values;
+  session.renderEdvs(rig_pose, 0.0, {}, hits, values);
+  const int w = config_.edvs.width, h = config_.edvs.height;
+  intensity = cv::Mat(h, w, CV_32FC1);
+  depth_m = cv::Mat(h, w, CV_32FC1);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    intensity.at<float>(static_cast<int>(i) / w, static_cast<int>(i) % w) = values[i];
+    depth_m.at<float>(static_cast<int>(i) / w, static_cast<int>(i) % w) =
+        hits.plane[i] >= 0 ? hits.z[i] : std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
+DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_trajectory,
+                                  double t_begin_s, double t_end_s,
+                                  const std::vector<BlinkingLed>& leds,
+                                  const std::vector<MovingPlane>& moving_planes) const {
+  std::vector<TrueDepthEvent> events;
+  std::vector<DepthFrame> frames;
+  DedvsRun run = simulate(
+      scene, rig_trajectory, t_begin_s, t_end_s,
+      [&events](const std::vector<TrueDepthEvent>& batch) {
+        events.insert(events.end(), batch.begin(), batch.end());
+      },
+      [&frames](const DepthFrame& frame) { frames.push_back(frame); }, leds, moving_planes);
+  run.events = std::move(events);
+  run.depth_frames = std::move(frames);
+  return run;
+}
+
+DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_trajectory,
+                                  double t_begin_s, double t_end_s, const EventSink& event_sink,
+                                  const DepthSink& depth_sink, const std::vector<BlinkingLed>& leds,
+                                  const std::vector<MovingPlane>& moving_planes) const {
+  validateInputs(scene, rig_trajectory, t_begin_s, t_end_s, leds, moving_planes);
+  Session session(config_, scene);
+  const CameraModel& edvs = config_.edvs;
+  const int width = edvs.width;
+  const int height = edvs.height;
+  DedvsRun run;
+
+  session.movePlanes(moving_planes, t_begin_s);
+  Eigen::Isometry3d rig = toIsometry(interpolatePose(rig_trajectory, t_begin_s));
+  Hits hits_previous, hits_current;
+  std::vector<float> intensity;
+  session.renderEdvs(rig, t_begin_s, leds, hits_previous, intensity);
+  EventGenerator generator(config_.events, width, height);
+  generator.start(intensity, t_begin_s);
+
+  const double gt_step_s = 1.0 / config_.ground_truth_rate_hz;
+  std::size_t gt_index = 0;
+  auto emitGroundTruth = [&](double up_to_s) {
+    for (double t = t_begin_s + gt_index * gt_step_s; t <= up_to_s;
+         t = t_begin_s + static_cast<double>(gt_index) * gt_step_s) {
+      const Eigen::Isometry3d pose = toIsometry(interpolatePose(rig_trajectory, t));
+      run.rig_ground_truth.push_back(toStamped(t, pose));
+      run.edvs_ground_truth.push_back(toStamped(t, pose * config_.depth_from_edvs));
+      ++gt_index;
+    }
+  };
+  emitGroundTruth(t_begin_s);
+
+  const double frame_period_s = 1.0 / config_.depth.frame_rate_hz;
+  std::uint64_t frame_index = 0;
+  double next_frame_s = t_begin_s;
+  auto emitFrames = [&](double up_to_s) {
+    while (next_frame_s <= up_to_s) {
+      session.movePlanes(moving_planes, next_frame_s);
+      const Eigen::Isometry3d frame_rig = toIsometry(interpolatePose(rig_trajectory, next_frame_s));
+      DepthFrame frame = session.renderDepth(frame_rig, next_frame_s, frame_index);
+      if (depth_sink) depth_sink(frame);
+      ++frame_index;
+      next_frame_s = t_begin_s + static_cast<double>(frame_index) * frame_period_s;
+    }
+  };
+  emitFrames(t_begin_s);
+
+  // Largest step: the render rate, and an eighth of any LED's period (its edges are timed by
+  // the interpolation between renders).
+  double max_step_s = 1.0 / config_.render_rate_hz;
+  for (const BlinkingLed& led : leds) max_step_s = std::min(max_step_s, 0.125 / led.frequency_hz);
+
+  // Probe pixels for the step control: corners, edge midpoints and centre.
+  std::vector<std::size_t> probes;
+  for (int py : {0, height / 2, height - 1}) {
+    for (int px : {0, width / 2, width - 1}) {
+      probes.push_back(static_cast<std::size_t>(py) * width + px);
+    }
+  }
+  const RayGrid& grid = session.edvsGrid();
+
+  EventVector step_events;
+  std::vector<std::uint8_t> noise_flags;
+  std::vector<TrueDepthEvent> batch;
+  double t0 = t_begin_s;
+  while (t0 < t_end_s) {
+    double t1 = std::min(t0 + max_step_s, t_end_s);
+    const Eigen::Isometry3d edvs0 = rig * config_.depth_from_edvs;
+    Eigen::Isometry3d next_rig = toIsometry(interpolatePose(rig_trajectory, t1));
+    double motion_px = 0.0;
+    const Eigen::Isometry3d to_next = (next_rig * config_.depth_from_edvs).inverse() * edvs0;
+    for (std::size_t i : probes) {
+      const Eigen::Vector3d ray(grid.x[i], grid.y[i], 1.0);
+      const Eigen::Vector2d start(static_cast<double>(i % width), static_cast<double>(i / width));
+      const float z = hits_previous.z[i];
+      // Points without a hit move with the rotation alone (at infinity).
+      const Eigen::Vector3d moved = std::isinf(z) ? Eigen::Vector3d(to_next.linear() * ray)
+                                                  : Eigen::Vector3d(to_next * (z * ray));
+      const std::optional<Eigen::Vector2d> end = edvs.project(moved);
+      motion_px = end ? std::max(motion_px, (*end - start).norm()) : 1e9;
+    }
+    if (motion_px > config_.max_step_motion_px) {
+      const double subdivisions = std::min(std::ceil(motion_px / config_.max_step_motion_px), 1e3);
+      t1 = t0 + (t1 - t0) / subdivisions;
+      next_rig = toIsometry(interpolatePose(rig_trajectory, t1));
+    }
+    session.movePlanes(moving_planes, t1);
+    session.renderEdvs(next_rig, t1, leds, hits_current, intensity);
+    ++run.render_steps;
+    step_events.clear();
+    noise_flags.clear();
+    const std::size_t signal = generator.step(intensity, t1, step_events, &noise_flags);
+    run.signal_events += signal;
+    run.noise_events += step_events.size() - signal;
+    // Ground truth per event: the depth at the nearer render in time when the two renders see
+    // different surfaces, else interpolated.
+    batch.clear();
+    batch.reserve(step_events.size());
+    for (std::size_t e = 0; e < step_events.size(); ++e) {
+      const Event& event = step_events[e];
+      const std::size_t i = static_cast<std::size_t>(event.y) * width + event.x;
+      const double fraction = std::clamp((event.t_us * 1e-6 - t0) / (t1 - t0), 0.0, 1.0);
+      const float z0 = hits_previous.z[i];
+      const float z1 = hits_current.z[i];
+      const bool use_first = fraction < 0.5;
+      float depth;
+      if (std::isinf(z0) || std::isinf(z1) || std::abs(z1 - z0) > 0.02f * std::min(z0, z1)) {
+        depth = use_first ? z0 : z1;
+      } else {
+        depth = z0 + static_cast<float>(fraction) * (z1 - z0);
+      }
+      TrueDepthEvent annotated;
+      annotated.event = event;
+      annotated.is_noise = noise_flags[e] != 0;
+      annotated.depth_m = std::isinf(depth) ? std::numeric_limits<float>::quiet_NaN() : depth;
+      annotated.at_depth_edge =
+          atDepthEdge(use_first ? hits_previous.z : hits_current.z, width, height, i, 0.1f);
+      batch.push_back(annotated);
+    }
+    if (event_sink && !batch.empty()) event_sink(batch);
+    std::swap(hits_previous, hits_current);
+    rig = next_rig;
+    t0 = t1;
+    emitGroundTruth(t0);
+    emitFrames(t0);
+  }
+  if (run.rig_ground_truth.back().t_s < t_end_s) {
+    const Eigen::Isometry3d pose = toIsometry(interpolatePose(rig_trajectory, t_end_s));
+    run.rig_ground_truth.push_back(toStamped(t_end_s, pose));
+    run.edvs_ground_truth.push_back(toStamped(t_end_s, pose * config_.depth_from_edvs));
+  }
+  return run;
+}
+
+}  // namespace ebslam
