@@ -11,9 +11,11 @@ import numpy as np
 import rosbag
 
 EXPECTED = {
-    "/camera/rgb/image": "camera_rgb_optical_frame",
-    "/camera/depth/image": "camera_rgb_optical_frame",
+    "/camera/rgb/image_rect_color": "camera_rgb_optical_frame",
+    "/camera/depth_registered/image_raw": "camera_rgb_optical_frame",
     "/camera/rgb/camera_info": "camera_rgb_optical_frame",
+    "/camera/superpixels": "camera_rgb_optical_frame",
+    "/camera/segmentation": "camera_rgb_optical_frame",
     "/edvs/events": "edvs_optical_frame",
     "/edvs/camera_info": "edvs_optical_frame",
 }
@@ -55,7 +57,7 @@ def main(out):
                 if msg.events:
                     first_event = first_event or msg.events[0].ts.to_sec()
                     last_event = msg.events[-1].ts.to_sec()
-            if topic in ("/camera/rgb/image", "/camera/depth/image") and topic not in saved:
+            if topic in ("/camera/rgb/image_rect_color", "/camera/depth_registered/image_raw") and topic not in saved:
                 save_png(os.path.join(out, topic.strip("/").replace("/", "_") + "_first.png"), msg)
                 saved.add(topic)
     print(f"  ROS recording: {os.path.relpath(bag_path, os.path.dirname(out))}")

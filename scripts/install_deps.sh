@@ -27,7 +27,7 @@ packages=(
   # tools
   python3-roslaunch python3-rostest librostest-dev python3-rosunit librosbag-dev librosbag-storage-dev
   python3-rosbag python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-rosmsg
-  python3-rosmaster rosout rosbash topic-tools
+  python3-rosmaster rosout rosbash topic-tools python3-message-filters
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libnodeletlib-dev libnodelet-dev libnodeletlib-tools libclass-loader-dev
   rviz

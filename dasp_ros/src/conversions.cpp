@@ -2,6 +2,11 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cstring>
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -56,6 +61,23 @@ dasp::Intrinsics toIntrinsics(const sensor_msgs::CameraInfo& info) {
         "camera_info focal lengths must be positive (fx = " + std::to_string(intrinsics.fx) +
         ", fy = " + std::to_string(intrinsics.fy) + ")");
   }
+  return intrinsics;
+}
+
+dasp::Intrinsics intrinsicsFromFieldOfView(double horizontal_fov_rad, double vertical_fov_rad,
+                                           int width, int height) {
+  for (double fov : {horizontal_fov_rad, vertical_fov_rad}) {
+    if (!(fov > 0.0 && fov < M_PI)) {
+      throw std::invalid_argument("field of view " + std::to_string(fov) +
+                                  " rad is not in (0, pi)");
+    }
+  }
+  if (width <= 0 || height <= 0) throw std::invalid_argument("image size must be positive");
+  dasp::Intrinsics intrinsics;
+  intrinsics.fx = static_cast<float>(0.5 * width / std::tan(0.5 * horizontal_fov_rad));
+  intrinsics.fy = static_cast<float>(0.5 * height / std::tan(0.5 * vertical_fov_rad));
+  intrinsics.cx = 0.5f * static_cast<float>(width - 1);
+  intrinsics.cy = 0.5f * static_cast<float>(height - 1);
   return intrinsics;
 }
 
@@ -220,6 +242,105 @@ dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
     result.superpixels.push_back(sp);
   }
   return result;
+}
+
+std::vector<ebslam_msgs::SuperpixelEdge> toEdgeMsgs(const dasp::WeightedGraph& graph) {
+  std::vector<ebslam_msgs::SuperpixelEdge> edges;
+  edges.reserve(graph.edges.size());
+  for (const dasp::GraphEdge& e : graph.edges) {
+    ebslam_msgs::SuperpixelEdge out;
+    out.a = static_cast<uint32_t>(e.a);
+    out.b = static_cast<uint32_t>(e.b);
+    out.weight = e.weight;
+    edges.push_back(out);
+  }
+  return edges;
+}
+
+dasp::WeightedGraph toWeightedGraph(const std::vector<ebslam_msgs::SuperpixelEdge>& edges,
+                                    int node_count) {
+  dasp::WeightedGraph graph;
+  graph.node_count = node_count;
+  graph.edges.reserve(edges.size());
+  for (const ebslam_msgs::SuperpixelEdge& e : edges) {
+    if (e.a >= e.b || e.b >= static_cast<uint32_t>(node_count)) {
+      throw std::invalid_argument("edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) +
+                                  ") is not a < b < " + std::to_string(node_count));
+    }
+    graph.edges.push_back({static_cast<int>(e.a), static_cast<int>(e.b), e.weight});
+  }
+  return graph;
+}
+
+visualization_msgs::MarkerArray toMarkerArray(const std::vector<dasp::Superpixel>& superpixels,
+                                              const std_msgs::Header& header) {
+  visualization_msgs::MarkerArray markers;
+  markers.markers.reserve(superpixels.size() + 1);
+  visualization_msgs::Marker clear;
+  clear.header = header;
+  clear.ns = "superpixels";
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  markers.markers.push_back(clear);
+  for (const dasp::Superpixel& sp : superpixels) {
+    visualization_msgs::Marker m;
+    m.header = header;
+    m.ns = "superpixels";
+    m.id = sp.id;
+    m.type = visualization_msgs::Marker::CYLINDER;
+    m.action = visualization_msgs::Marker::ADD;
+    m.pose.position.x = sp.position.x();
+    m.pose.position.y = sp.position.y();
+    m.pose.position.z = sp.position.z();
+    // The cylinder's axis is its local z: rotate z onto the normal.
+    const Eigen::Quaternionf q =
+        Eigen::Quaternionf::FromTwoVectors(Eigen::Vector3f::UnitZ(), sp.normal.normalized());
+    m.pose.orientation.x = q.x();
+    m.pose.orientation.y = q.y();
+    m.pose.orientation.z = q.z();
+    m.pose.orientation.w = q.w();
+    m.scale.x = m.scale.y = 2.0 * sp.radius_m;
+    m.scale.z = std::max(sp.thickness, 0.002f);
+    m.color.r = sp.color.x();
+    m.color.g = sp.color.y();
+    m.color.b = sp.color.z();
+    m.color.a = 1.0f;
+    markers.markers.push_back(m);
+  }
+  return markers;
+}
+
+sensor_msgs::PointCloud2 toCentreCloud(const std::vector<dasp::Superpixel>& superpixels,
+                                       const std_msgs::Header& header) {
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header = header;
+  sensor_msgs::PointCloud2Modifier modifier(cloud);
+  modifier.setPointCloud2Fields(
+      8, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
+      sensor_msgs::PointField::FLOAT32, "normal_x", 1, sensor_msgs::PointField::FLOAT32, "normal_y",
+      1, sensor_msgs::PointField::FLOAT32, "normal_z", 1, sensor_msgs::PointField::FLOAT32, "rgb",
+      1, sensor_msgs::PointField::FLOAT32, "id", 1, sensor_msgs::PointField::UINT32);
+  modifier.resize(superpixels.size());
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), nx(cloud, "normal_x"), rgb(cloud, "rgb");
+  sensor_msgs::PointCloud2Iterator<uint32_t> id(cloud, "id");
+  for (const dasp::Superpixel& sp : superpixels) {
+    x[0] = sp.position.x();
+    x[1] = sp.position.y();
+    x[2] = sp.position.z();
+    nx[0] = sp.normal.x();
+    nx[1] = sp.normal.y();
+    nx[2] = sp.normal.z();
+    auto channel = [](float value) {
+      return static_cast<uint32_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
+    };
+    const uint32_t packed =
+        (channel(sp.color.x()) << 16) | (channel(sp.color.y()) << 8) | channel(sp.color.z());
+    float packed_float;
+    std::memcpy(&packed_float, &packed, sizeof(packed_float));
+    *rgb = packed_float;
+    *id = static_cast<uint32_t>(sp.id);
+    ++x, ++nx, ++rgb, ++id;
+  }
+  return cloud;
 }
 
 }  // namespace dasp_ros

@@ -1,10 +1,11 @@
 // Publishes the frames of an RGB-D image folder as a registered colour/depth stream.
 //
 // Publications (relative names, remap them in the launch file):
-//   rgb/image          sensor_msgs/Image bgr8
-//   depth/image        sensor_msgs/Image 16UC1, millimetres, registered to rgb (same frame)
-//   rgb/camera_info    sensor_msgs/CameraInfo (pinhole, no distortion)
-//   depth/camera_info  sensor_msgs/CameraInfo (identical: the depth image is registered)
+//   rgb/image_rect_color          sensor_msgs/Image bgr8
+//   depth_registered/image_raw    sensor_msgs/Image 16UC1, millimetres, registered to rgb
+//   rgb/camera_info               sensor_msgs/CameraInfo (pinhole, no distortion)
+//   depth_registered/camera_info  sensor_msgs/CameraInfo (identical: the depth is registered)
+// (the rgbd_launch / openni2_launch names, which dasp_ros/Dasp and Tdasp subscribe to)
 // All four carry the same stamp (wall clock at publication) and ~frame_id.
 #include <dasp/rgbd_io.h>
 #include <nodelet/nodelet.h>
@@ -38,10 +39,10 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
           config_.folder.c_str());
       return;
     }
-    color_pub_ = nh.advertise<sensor_msgs::Image>("rgb/image", 2);
-    depth_pub_ = nh.advertise<sensor_msgs::Image>("depth/image", 2);
+    color_pub_ = nh.advertise<sensor_msgs::Image>("rgb/image_rect_color", 2);
+    depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 2);
     color_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("rgb/camera_info", 2);
-    depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth/camera_info", 2);
+    depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth_registered/camera_info", 2);
     NODELET_INFO("publishing %zu frames from '%s' at %.1f Hz%s%s", frames_.size(),
                  config_.folder.c_str(), config_.rate_hz, config_.loop ? " in a loop" : "",
                  config_.wait_for_subscribers ? " once a subscriber connects" : "");

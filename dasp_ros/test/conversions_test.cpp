@@ -5,6 +5,7 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include <cmath>
+#include <cstring>
 #include <opencv2/core.hpp>
 
 #include "dasp_ros/conversions.h"
@@ -147,6 +148,58 @@ TEST(Conversions, BadMessagesThrowInvalidArgument) {
   sensor_msgs::CameraInfo nan_info = info;
   nan_info.K[2] = std::nan("");
   EXPECT_THROW(dasp_ros::toIntrinsics(nan_info), std::invalid_argument);
+}
+
+}  // namespace
+
+namespace {
+
+// PrimeSense Carmine 1.09 / Xtion colour stream as OpenNI2 reports it: 1.0225 x 0.7971 rad.
+TEST(Conversions, IntrinsicsFromFieldOfView) {
+  const dasp::Intrinsics k = dasp_ros::intrinsicsFromFieldOfView(1.0225, 0.7971, 640, 480);
+  EXPECT_NEAR(k.fx, 320.0 / std::tan(0.51125), 1e-3);
+  EXPECT_NEAR(k.fx, 570.3, 0.5);  // the focal length openni2_camera derives for these devices
+  EXPECT_NEAR(k.fy, 240.0 / std::tan(0.39855), 1e-3);
+  EXPECT_FLOAT_EQ(k.cx, 319.5f);
+  EXPECT_FLOAT_EQ(k.cy, 239.5f);
+  const dasp::Intrinsics half = dasp_ros::intrinsicsFromFieldOfView(1.0225, 0.7971, 320, 240);
+  EXPECT_NEAR(half.fx, 0.5 * k.fx, 1e-3);
+  EXPECT_FLOAT_EQ(half.cx, 159.5f);
+  EXPECT_THROW(dasp_ros::intrinsicsFromFieldOfView(0.0, 0.8, 640, 480), std::invalid_argument);
+  EXPECT_THROW(dasp_ros::intrinsicsFromFieldOfView(1.0, 3.2, 640, 480), std::invalid_argument);
+  EXPECT_THROW(dasp_ros::intrinsicsFromFieldOfView(1.0, 0.8, 0, 480), std::invalid_argument);
+}
+
+TEST(Conversions, EdgesRoundTripAndMarkersAndCloud) {
+  dasp::WeightedGraph graph;
+  graph.node_count = 3;
+  graph.edges = {{0, 1, 0.25f}, {1, 2, 0.75f}};
+  const dasp::WeightedGraph back = dasp_ros::toWeightedGraph(dasp_ros::toEdgeMsgs(graph), 3);
+  ASSERT_EQ(back.edges.size(), 2u);
+  EXPECT_EQ(back.edges[1].a, 1);
+  EXPECT_EQ(back.edges[1].weight, 0.75f);
+  EXPECT_THROW(dasp_ros::toWeightedGraph(dasp_ros::toEdgeMsgs(graph), 2), std::invalid_argument);
+
+  dasp::Superpixel sp;
+  sp.id = 0;
+  sp.position = {0.1f, -0.2f, 1.5f};
+  sp.normal = {0.0f, 0.0f, -1.0f};
+  sp.radius_m = 0.02f;
+  sp.color = {1.0f, 0.5f, 0.0f};
+  const visualization_msgs::MarkerArray markers = dasp_ros::toMarkerArray({sp}, header());
+  ASSERT_EQ(markers.markers.size(), 2u);
+  EXPECT_EQ(markers.markers[1].header.frame_id, header().frame_id);
+  EXPECT_DOUBLE_EQ(markers.markers[1].scale.x, 2.0 * static_cast<double>(0.02f));
+  // The disc's axis (local z) is the normal: rotating +z by the orientation gives -z.
+  const auto& q = markers.markers[1].pose.orientation;
+  const double z_of_axis = 1.0 - 2.0 * (q.x * q.x + q.y * q.y);
+  EXPECT_NEAR(z_of_axis, -1.0, 1e-6);
+  const sensor_msgs::PointCloud2 cloud = dasp_ros::toCentreCloud({sp}, header());
+  EXPECT_EQ(cloud.width, 1u);
+  EXPECT_EQ(cloud.header.stamp, header().stamp);
+  float z = 0.0f;
+  std::memcpy(&z, &cloud.data[cloud.fields[2].offset], sizeof(z));
+  EXPECT_EQ(z, 1.5f);
 }
 
 }  // namespace

@@ -31,10 +31,10 @@ TEST(RgbdFolderSource, PublishesTheFolderWithFrameAndStamp) {
   ros::NodeHandle nh;
   Received received;
   auto color_sub = nh.subscribe<sensor_msgs::Image>(
-      "camera/rgb/image", 10,
+      "camera/rgb/image_rect_color", 10,
       [&](const sensor_msgs::ImageConstPtr& m) { received.color.push_back(*m); });
   auto depth_sub = nh.subscribe<sensor_msgs::Image>(
-      "camera/depth/image", 10,
+      "camera/depth_registered/image_raw", 10,
       [&](const sensor_msgs::ImageConstPtr& m) { received.depth.push_back(*m); });
   auto info_sub = nh.subscribe<sensor_msgs::CameraInfo>(
       "camera/rgb/camera_info", 10,
@@ -85,17 +85,19 @@ TEST(RgbdFolderSource, PublishesTheFolderWithFrameAndStamp) {
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
     bag.setCompression(rosbag::compression::LZ4);
-    for (const auto& m : received.color) bag.write("/camera/rgb/image", m.header.stamp, m);
-    for (const auto& m : received.depth) bag.write("/camera/depth/image", m.header.stamp, m);
+    for (const auto& m : received.color)
+      bag.write("/camera/rgb/image_rect_color", m.header.stamp, m);
+    for (const auto& m : received.depth)
+      bag.write("/camera/depth_registered/image_raw", m.header.stamp, m);
     for (const auto& m : received.info) bag.write("/camera/rgb/camera_info", m.header.stamp, m);
   }
   Received replayed;
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
     for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-      if (m.getTopic() == "/camera/rgb/image")
+      if (m.getTopic() == "/camera/rgb/image_rect_color")
         replayed.color.push_back(*m.instantiate<sensor_msgs::Image>());
-      if (m.getTopic() == "/camera/depth/image")
+      if (m.getTopic() == "/camera/depth_registered/image_raw")
         replayed.depth.push_back(*m.instantiate<sensor_msgs::Image>());
       if (m.getTopic() == "/camera/rgb/camera_info") {
         replayed.info.push_back(*m.instantiate<sensor_msgs::CameraInfo>());

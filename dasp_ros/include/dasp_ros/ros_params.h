@@ -4,6 +4,8 @@
 // throws std::invalid_argument naming the parameter when a value makes no sense.
 
 #include <dasp/dasp.h>
+#include <dasp/segmentation.h>
+#include <dasp/tdasp.h>
 #include <ros/node_handle.h>
 
 #include <string>
@@ -24,5 +26,67 @@ struct RgbdFolderSourceConfig {
 };
 
 RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& private_nh);
+
+/// How the synchronised RGB-D inputs are matched (colour image, registered depth, camera_info).
+struct RgbdInputConfig {
+  /// ~approximate_sync: match by nearest stamps (drivers that stamp colour and depth apart);
+  /// false: identical stamps (registered PrimeSense drivers, the folder source, bags of them)
+  bool approximate_sync = false;
+  int queue_size = 5;  ///< ~queue_size: messages per input kept while waiting for a match
+};
+
+/// Parameters of dasp_ros/Dasp.
+struct DaspNodeConfig {
+  RgbdInputConfig input;
+  /// ~size_mode ("count" | "radius"), ~superpixel_count, ~radius [m], ~iterations,
+  /// ~weight_spatial, ~weight_color, ~weight_normal, ~weight_depth, ~window_multiple,
+  /// ~enforce_connectivity, ~min_size_fraction, ~max_slant_factor, ~depth_exponent,
+  /// ~normal_step_px, ~depth_jump_ratio, ~seed, ~threads: dasp::DaspConfig's fields
+  dasp::DaspConfig dasp;
+  /// ~graph/min_border_pairs, ~graph/weight_color, ~graph/weight_position,
+  /// ~graph/weight_normal, ~graph/radius [m]: neighbourhood graph of the `edges` field
+  dasp::SuperpixelGraphConfig graph;
+};
+
+/// Parameters of dasp_ros/Sdasp.
+struct SdaspNodeConfig {
+  int queue_size = 5;  ///< ~queue_size
+  /// ~graph/..., ~spectral/eigenvector_count, ~threshold [1]
+  dasp::SdaspConfig sdasp;
+  /// ~ucm_encoding: "32FC1" (merge level; -1 off boundaries, +inf never merged) or "mono8"
+  /// (255 (1 - sqrt(min(level, 1))): dark strokes on white, as dasp_sdasp draws it)
+  std::string ucm_encoding = "32FC1";
+};
+
+/// Parameters of dasp_ros/Tdasp.
+struct TdaspNodeConfig {
+  RgbdInputConfig input;
+  /// DASP parameters (names as for Dasp), ~dds/smoothing_radius_multiple,
+  /// ~strands/max_color_change, ~strands/max_normal_change, ~strands/max_position_change,
+  /// ~strands/max_strands, ~graph/..., ~spectral/eigenvector_count,
+  /// ~hysteresis/force, ~hysteresis/normal, ~hysteresis/grant
+  dasp::TdaspConfig tdasp;
+};
+
+/// Parameters of dasp_ros/OpenNi2Source.
+struct OpenNi2SourceConfig {
+  std::string device_uri;  ///< ~device_uri: OpenNI2 URI (or .oni file); empty = first device
+  int width = 640;         ///< ~width [px]: 640 (with height 480) or 320 (with 240)
+  int height = 480;        ///< ~height [px]
+  int fps = 30;            ///< ~fps [Hz]
+  std::string frame_id = "camera_rgb_optical_frame";  ///< ~frame_id
+  /// ~camera_info_url: camera_info_manager URL of a calibration; empty = from the field of view
+  std::string camera_info_url;
+  double retry_min_s = 1.0;   ///< ~retry_min [s]: first wait after a failed connection
+  double retry_max_s = 30.0;  ///< ~retry_max [s]: the wait doubles up to this
+};
+
+OpenNi2SourceConfig loadOpenNi2SourceConfig(const ros::NodeHandle& private_nh);
+DaspNodeConfig loadDaspNodeConfig(const ros::NodeHandle& private_nh);
+SdaspNodeConfig loadSdaspNodeConfig(const ros::NodeHandle& private_nh);
+TdaspNodeConfig loadTdaspNodeConfig(const ros::NodeHandle& private_nh);
+
+/// "count" -> kCount, "radius" -> kRadius; throws std::invalid_argument otherwise.
+dasp::SizeMode parseSizeMode(const std::string& text);
 
 }  // namespace dasp_ros

@@ -1,0 +1,190 @@
+// dasp_ros/Sdasp: s-DASP image segmentation (thesis ch. 4) of the superpixels published by Dasp.
+//
+// Subscriptions (matched by identical stamps):
+//   superpixels          ebslam_msgs/SuperpixelArray
+//   superpixels/labels   sensor_msgs/Image 32SC1 (image_transport)
+// Publications, all with the SuperpixelArray's header:
+//   segmentation         ebslam_msgs/Segmentation (segment id per superpixel, ultrametric contour
+//                        graph, threshold)
+//   segments/labels      sensor_msgs/Image 32SC1, segment id per pixel, -1 = none
+//   segments/overlay     sensor_msgs/Image bgr8: superpixel mean colours, segment boundaries red
+//   (lazy) segments/ucm         sensor_msgs/Image 32FC1 merge levels or mono8 (~ucm_encoding)
+//   (lazy)
+// The segments are the core's: dasp::ultrametricContourGraph, then dasp::segmentGraph at the
+// threshold, on the superpixels rebuilt from the messages (float fields travel unchanged).
+#include <dasp/segmentation.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <ebslam_msgs/Segmentation.h>
+#include <ebslam_msgs/SuperpixelArray.h>
+#include <image_transport/image_transport.h>
+#include <image_transport/subscriber_filter.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <cv_bridge/cv_bridge.h>
+#include <memory>
+#include <mutex>
+#include <pluginlib/class_list_macros.hpp>
+#include <string>
+
+#include "dasp_ros/SdaspNodeletConfig.h"
+#include "dasp_ros/conversions.h"
+#include "dasp_ros/rendering.h"
+#include "dasp_ros/rgbd_input.h"
+#include "dasp_ros/ros_params.h"
+
+namespace dasp_ros {
+
+class SdaspNodelet : public nodelet::Nodelet {
+ private:
+  using Array = ebslam_msgs::SuperpixelArray;
+  using Policy = message_filters::sync_policies::ExactTime<Array, sensor_msgs::Image>;
+
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    try {
+      config_ = loadSdaspNodeConfig(pnh);
+    } catch (const std::exception& error) {
+      NODELET_FATAL("Sdasp not started: %s", error.what());
+      throw;
+    }
+    array_topic_ = nh.resolveName("superpixels");
+    labels_topic_ = nh.resolveName("superpixels/labels");
+    image_transport::ImageTransport transport(nh);
+    segmentation_pub_ = nh.advertise<ebslam_msgs::Segmentation>("segmentation", 5);
+    labels_pub_ = transport.advertise("segments/labels", 5);
+    overlay_pub_ = transport.advertise("segments/overlay", 1);
+    ucm_pub_ = transport.advertise("segments/ucm", 1);
+
+    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SdaspNodeletConfig>>(pnh);
+    reconfigure_->setCallback([this](SdaspNodeletConfig& c, uint32_t) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      config_.sdasp.threshold = static_cast<float>(c.threshold);
+    });
+    updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
+    updater_->setHardwareID("none");
+    updater_->add("segmentation", this, &SdaspNodelet::diagnose);
+    diagnostics_timer_ = nh.createWallTimer(
+        ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { updater_->update(); });
+
+    const uint32_t queue = static_cast<uint32_t>(config_.queue_size);
+    transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+    array_sub_.subscribe(nh, "superpixels", queue);
+    labels_sub_.subscribe(*transport_, "superpixels/labels", queue);
+    sync_ = std::make_unique<message_filters::Synchronizer<Policy>>(Policy(queue), array_sub_,
+                                                                    labels_sub_);
+    sync_->registerCallback(&SdaspNodelet::onSuperpixels, this);
+  }
+
+  void onSuperpixels(const ebslam_msgs::SuperpixelArrayConstPtr& array,
+                     const sensor_msgs::ImageConstPtr& labels_msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std_msgs::Header& header = array->header;
+    if (!last_stamp_.isZero() && header.stamp < last_stamp_) {
+      NODELET_WARN_THROTTLE(1.0, "%s: stamp went back by %.3f s; processing it (no state)",
+                            array_topic_.c_str(), (last_stamp_ - header.stamp).toSec());
+    }
+    last_stamp_ = header.stamp;
+    dasp::Superpixels superpixels;
+    dasp::WeightedGraph ucg;
+    std::vector<int> node_segments;
+    cv::Mat segments;
+    try {
+      superpixels = toSuperpixels(*array, *labels_msg);
+      double max_label = -1.0;
+      cv::minMaxLoc(superpixels.labels, nullptr, &max_label);
+      if (max_label >= static_cast<double>(superpixels.superpixels.size())) {
+        throw std::invalid_argument("label " + std::to_string(static_cast<long long>(max_label)) +
+                                    " has no superpixel (the array holds " +
+                                    std::to_string(superpixels.superpixels.size()) + ")");
+      }
+    } catch (const std::invalid_argument& e) {
+      reject(labels_topic_ + " does not match " + array_topic_ + ": " + e.what());
+      return;
+    }
+    try {
+      ucg = dasp::ultrametricContourGraph(superpixels, config_.sdasp);
+      node_segments = dasp::segmentGraph(ucg, config_.sdasp.threshold);
+      segments = dasp::segmentPixels(superpixels.labels, node_segments);
+    } catch (const std::invalid_argument& e) {
+      reject(array_topic_ + ": " + e.what());
+      return;
+    }
+    ebslam_msgs::Segmentation segmentation;
+    segmentation.header = header;
+    segmentation.segment_ids.assign(node_segments.begin(), node_segments.end());
+    segmentation.ultrametric = toEdgeMsgs(ucg);
+    segmentation.threshold = config_.sdasp.threshold;
+    segmentation_pub_.publish(segmentation);
+    labels_pub_.publish(toLabelImageMsg(segments, header));
+    if (overlay_pub_.getNumSubscribers() > 0) {
+      overlay_pub_.publish(toColorImageMsg(
+          drawSegmentOverlay(superpixels.labels, superpixels.superpixels, segments), header));
+    }
+    if (ucm_pub_.getNumSubscribers() > 0) {
+      const cv::Mat ucm = dasp::ultrametricContourMap(superpixels.labels, ucg);
+      if (config_.ucm_encoding == "mono8") {
+        ucm_pub_.publish(
+            cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, ucmToMono8(ucm))
+                .toImageMsg());
+      } else {
+        ucm_pub_.publish(
+            cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_32FC1, ucm).toImageMsg());
+      }
+    }
+    ++processed_;
+    last_segments_ = node_segments.empty()
+                         ? 0
+                         : static_cast<std::size_t>(
+                               *std::max_element(node_segments.begin(), node_segments.end()) + 1);
+  }
+
+  void reject(const std::string& reason) {
+    ++rejected_;
+    last_error_ = reason;
+    if (throttle_.allow(reason)) NODELET_WARN("frame skipped: %s", reason.c_str());
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (rejected_ > 0 && processed_ == 0) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, last_error_);
+    } else {
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK,
+                     processed_ == 0 ? "waiting for superpixels" : "segmenting");
+    }
+    status.add("frames segmented", processed_);
+    status.add("frames rejected", rejected_);
+    status.add("last rejection", last_error_);
+    status.add("segments in the last frame", last_segments_);
+    status.add("threshold", config_.sdasp.threshold);
+  }
+
+  SdaspNodeConfig config_;
+  std::string array_topic_, labels_topic_;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
+  message_filters::Subscriber<Array> array_sub_;
+  image_transport::SubscriberFilter labels_sub_;
+  std::unique_ptr<message_filters::Synchronizer<Policy>> sync_;
+  ros::Publisher segmentation_pub_;
+  image_transport::Publisher labels_pub_, overlay_pub_, ucm_pub_;
+  std::unique_ptr<dynamic_reconfigure::Server<SdaspNodeletConfig>> reconfigure_;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  ros::WallTimer diagnostics_timer_;
+
+  ReasonThrottle throttle_;
+  std::mutex mutex_;
+  ros::Time last_stamp_;
+  std::size_t processed_ = 0, rejected_ = 0, last_segments_ = 0;
+  std::string last_error_;
+};
+
+}  // namespace dasp_ros
+
+PLUGINLIB_EXPORT_CLASS(dasp_ros::SdaspNodelet, nodelet::Nodelet)
