@@ -5,7 +5,11 @@
 # Usage: dasp_ros/scripts/same_results.sh [folder] [out_dir]   (after `make build`)
 set -eo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-folder="${1:-${repo}/../shared/data/osd/learn}"
+# ../shared beside this checkout, or beside the main checkout when this is a git worktree.
+main_repo="$(dirname "$(git -C "${repo}" rev-parse --path-format=absolute --git-common-dir 2>/dev/null || echo "${repo}/.git")")"
+default_folder="${repo}/../shared/data/osd/learn"
+[ -d "${default_folder}" ] || default_folder="${main_repo}/../shared/data/osd/learn"
+folder="${1:-${default_folder}}"
 out="${2:-/tmp/dasp_ros_same_results}"
 [ -d "${folder}" ] || { echo "same_results: no folder ${folder} (../shared absent?)" >&2; exit 2; }
 mkdir -p "${out}"

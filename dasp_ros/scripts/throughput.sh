@@ -9,7 +9,11 @@
 # Usage: dasp_ros/scripts/throughput.sh [folder] [seconds]   (after `make build`)
 set -eo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-folder="${1:-${repo}/../shared/data/osd/learn}"
+# ../shared beside this checkout, or beside the main checkout when this is a git worktree.
+main_repo="$(dirname "$(git -C "${repo}" rev-parse --path-format=absolute --git-common-dir 2>/dev/null || echo "${repo}/.git")")"
+default_folder="${repo}/../shared/data/osd/learn"
+[ -d "${default_folder}" ] || default_folder="${main_repo}/../shared/data/osd/learn"
+folder="${1:-${default_folder}}"
 seconds="${2:-60}"
 source "${repo}/scripts/ros_env.sh"
 set +u; source "${repo}/.ws/devel/setup.bash"; set -u

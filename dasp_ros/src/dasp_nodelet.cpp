@@ -19,8 +19,10 @@
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+
 #include <sensor_msgs/PointCloud2.h>
 #include <visualization_msgs/MarkerArray.h>
+#include <boost/make_shared.hpp>
 
 #include <ctime>
 #include <memory>
@@ -138,8 +140,9 @@ class DaspNodelet : public nodelet::Nodelet {
     const double dasp_ms = threadCpuMilliseconds() - cpu_start;
     ebslam_msgs::SuperpixelArray array = toSuperpixelArrayMsg(superpixels, header);
     array.edges = toEdgeMsgs(dasp::buildSuperpixelGraph(superpixels, config_.graph));
-    superpixels_pub_.publish(array);
-    labels_pub_.publish(toLabelImageMsg(superpixels.labels, header));
+    superpixels_pub_.publish(boost::make_shared<ebslam_msgs::SuperpixelArray>(std::move(array)));
+    labels_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(superpixels.labels, header)));
     if (overlay_pub_.getNumSubscribers() > 0) {
       overlay_pub_.publish(
           toColorImageMsg(drawBoundaryOverlay(frame.color, superpixels.labels), header));

@@ -24,7 +24,9 @@
 #include <message_filters/synchronizer.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+
 #include <sensor_msgs/image_encodings.h>
+#include <boost/make_shared.hpp>
 
 #include <cv_bridge/cv_bridge.h>
 #include <memory>
@@ -121,8 +123,9 @@ class SdaspNodelet : public nodelet::Nodelet {
     segmentation.segment_ids.assign(node_segments.begin(), node_segments.end());
     segmentation.ultrametric = toEdgeMsgs(ucg);
     segmentation.threshold = config_.sdasp.threshold;
-    segmentation_pub_.publish(segmentation);
-    labels_pub_.publish(toLabelImageMsg(segments, header));
+    segmentation_pub_.publish(
+        boost::make_shared<ebslam_msgs::Segmentation>(std::move(segmentation)));
+    labels_pub_.publish(boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(segments, header)));
     if (overlay_pub_.getNumSubscribers() > 0) {
       overlay_pub_.publish(toColorImageMsg(
           drawSegmentOverlay(superpixels.labels, superpixels.superpixels, segments), header));

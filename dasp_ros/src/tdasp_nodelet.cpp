@@ -23,7 +23,9 @@
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+
 #include <std_srvs/Trigger.h>
+#include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <ctime>
@@ -137,8 +139,9 @@ class TdaspNodelet : public nodelet::Nodelet {
     const dasp::Superpixels& superpixels = out.superpixels.superpixels;
     ebslam_msgs::SuperpixelArray array = toSuperpixelArrayMsg(superpixels, header);
     array.edges = toEdgeMsgs(dasp::buildSuperpixelGraph(superpixels, config_.tdasp.strands.graph));
-    superpixels_pub_.publish(array);
-    labels_pub_.publish(toLabelImageMsg(superpixels.labels, header));
+    superpixels_pub_.publish(boost::make_shared<ebslam_msgs::SuperpixelArray>(std::move(array)));
+    labels_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(superpixels.labels, header)));
     ebslam_msgs::Segmentation segmentation;
     segmentation.header = header;
     segmentation.segment_ids.reserve(out.segment_label.size());
@@ -154,8 +157,10 @@ class TdaspNodelet : public nodelet::Nodelet {
     if (label_offset_ > 0) out.segment_labels.setTo(-1 - label_offset_, out.segment_labels < 0);
     if (label_offset_ > 0) out.segment_labels += static_cast<int>(label_offset_);
     segmentation.threshold = config_.tdasp.hysteresis.normal;
-    segmentation_pub_.publish(segmentation);
-    segment_labels_pub_.publish(toLabelImageMsg(out.segment_labels, header));
+    segmentation_pub_.publish(
+        boost::make_shared<ebslam_msgs::Segmentation>(std::move(segmentation)));
+    segment_labels_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(out.segment_labels, header)));
     if (overlay_pub_.getNumSubscribers() > 0) {
       overlay_pub_.publish(
           toColorImageMsg(drawBoundaryOverlay(frame.color, superpixels.labels), header));
