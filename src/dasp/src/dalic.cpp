@@ -276,7 +276,7 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
         if (coverSpanAligned(x0, x1 + 1, width, start, stop)) {
           Vec8i col = start + Vec8i{0, 1, 2, 3, 4, 5, 6, 7};
           for (int c = start; c < stop; c += kLanes, col += kLanes) {
-            const auto load = [&fr, c](const float* FeatureRow::*field) {
+            const auto load = [&fr, c](const float* FeatureRow::*field) DASP_LAMBDA_ALWAYS_INLINE {
               return loadVec<Vec8f>(fr.*field + c);
             };
             const Vec8f d = clusterDistance<kKind, kScaled, Vec8f>(t, load, col, dv2);
@@ -290,7 +290,8 @@ DASP_ALWAYS_INLINE void assignRows(const PixelFeatures& f, const ClusterTerms* t
       }
 #endif
       for (int col = x0; col <= x1; ++col) {
-        const auto load = [&fr, col](const float* FeatureRow::*field) { return (fr.*field)[col]; };
+        const auto load = [&fr, col](const float* FeatureRow::*field)
+                              DASP_LAMBDA_ALWAYS_INLINE { return (fr.*field)[col]; };
         const float d = clusterDistance<kKind, kScaled, float>(t, load, col, dv2);
         if (d < d_row[col]) {
           d_row[col] = d;

@@ -7,6 +7,11 @@
 
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define DASP_ALWAYS_INLINE inline __attribute__((always_inline))
+// For lambdas (after the parameter list). A lambda is a function of its own, built for the
+// baseline even inside a DASP_VECTOR_CLONES function; a clone that calls one taking or returning
+// Vec8f expects the vector in a register where the baseline passes it in memory (at -O0, where
+// nothing else is inlined, that crashed). Inlined, no call and no vector ABI remain.
+#define DASP_LAMBDA_ALWAYS_INLINE __attribute__((always_inline))
 // The function is built for x86-64-v4 (AVX-512), x86-64-v3 (AVX2, FMA) and the baseline, and the
 // best one for the CPU is chosen when the library is loaded: Debian builds for the baseline.
 #define DASP_VECTOR_CLONES \
@@ -17,6 +22,7 @@
 #define DASP_AVX512_FUNCTION __attribute__((target("avx512f")))
 #else
 #define DASP_ALWAYS_INLINE inline
+#define DASP_LAMBDA_ALWAYS_INLINE
 #define DASP_VECTOR_CLONES
 #define DASP_AVX512_FUNCTIONS 0
 #endif
@@ -52,8 +58,10 @@ inline bool avx512Available() {
 
 #if DASP_VECTOR_EXTENSIONS
 // Eight floats / ints: AVX2 or AVX-512 registers in those builds, two SSE registers in the
-// baseline one. Functions taking or returning them are always inlined (no vector ABI crosses an
-// object boundary; the build turns GCC's -Wpsabi note off for this reason).
+// baseline one. Functions and lambdas taking or returning them are always inlined
+// (DASP_ALWAYS_INLINE, DASP_LAMBDA_ALWAYS_INLINE), also at -O0: no call passes a vector, so the
+// clones built for another ISA never disagree on its ABI, and the build turns GCC's -Wpsabi
+// note off for this reason.
 typedef float Vec8f __attribute__((vector_size(32)));
 typedef int Vec8i __attribute__((vector_size(32)));
 template <typename Vec, typename T>
