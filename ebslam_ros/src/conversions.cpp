@@ -6,6 +6,18 @@
 
 namespace ebslam_ros {
 
+std::int64_t toMicroseconds(const ros::Time& stamp) {
+  return static_cast<std::int64_t>((stamp.toNSec() + 500) / 1000);
+}
+
+ros::Time fromMicroseconds(std::int64_t t_us) {
+  if (t_us < 0 || t_us > std::int64_t{4294967295} * 1000000) {
+    throw std::invalid_argument("time " + std::to_string(t_us) +
+                                " us is outside the range of ros::Time");
+  }
+  return ros::Time().fromNSec(static_cast<std::uint64_t>(t_us) * 1000);
+}
+
 std::optional<ros::Time> rosTimeOf(std::int64_t t_us, const TimeAnchor& anchor) {
   if (!(anchor.speed > 0.0)) throw std::invalid_argument("time anchor speed must be positive");
   std::int64_t offset_us = 0;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace ebslam_ros {
 namespace {
@@ -20,7 +21,219 @@ void requirePositive(double value, const ros::NodeHandle& nh, const std::string&
   }
 }
 
+void fail(const ros::NodeHandle& nh, const std::string& name, const std::string& why) {
+  throw std::invalid_argument("parameter " + nh.resolveName(name) + " " + why);
+}
+
+std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
+                             const std::array<double, 3>& default_value) {
+  std::vector<double> values;
+  if (!nh.getParam(name, values)) {
+    if (nh.hasParam(name)) fail(nh, name, "must be a list of three numbers");
+    return default_value;
+  }
+  if (values.size() != 3) fail(nh, name, "must be a list of three numbers");
+  for (double v : values) {
+    if (!std::isfinite(v)) fail(nh, name, "must hold finite numbers");
+  }
+  return {values[0], values[1], values[2]};
+}
+
+void requireFrame(const ros::NodeHandle& nh, const std::string& name, const std::string& frame) {
+  if (frame.empty()) fail(nh, name, "is empty");
+  if (frame.front() == '/') fail(nh, name, "= '" + frame + "' must not start with '/' (tf2)");
+}
+
+// Runs a core validate() and names the node's parameter namespace in its message.
+template <typename Config>
+void validateCore(const ros::NodeHandle& nh, const Config& config) {
+  try {
+    config.validate();
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument("parameters of " + nh.getNamespace() + ": " + error.what());
+  }
+}
+
 }  // namespace
+
+CeilingSensorConfig loadCeilingSensorConfig(const ros::NodeHandle& nh) {
+  CeilingSensorConfig config;
+  ebslam::CameraModel& c = config.camera;
+  c.width = param<int>(nh, "camera/width", c.width);
+  c.height = param<int>(nh, "camera/height", c.height);
+  c.focal_px = param<double>(nh, "camera/focal_px", c.focal_px);
+  c.principal_point.x() = param<double>(nh, "camera/cx", c.principal_point.x());
+  c.principal_point.y() = param<double>(nh, "camera/cy", c.principal_point.y());
+  c.kappa1 = param<double>(nh, "camera/kappa1", c.kappa1);
+  c.kappa2 = param<double>(nh, "camera/kappa2", c.kappa2);
+  config.ceiling_distance_m = param<double>(nh, "ceiling_distance", config.ceiling_distance_m);
+  if (c.width < 1 || c.height < 1 || c.width > 65535 || c.height > 65535) {
+    fail(nh, "camera/width", "and camera/height must be in 1..65535");
+  }
+  requirePositive(config.ceiling_distance_m, nh, "ceiling_distance");
+  validateCore(nh, c);
+  return config;
+}
+
+ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& nh,
+                                                const ebslam::EventFilterConfig& defaults) {
+  ebslam::EventFilterConfig f = defaults;
+  f.num_particles = param<int>(nh, "num_particles", f.num_particles);
+  f.batch_size = param<int>(nh, "batch_size", f.batch_size);
+  f.resample_every = param<int>(nh, "resample_every", f.resample_every);
+  f.beta = param<double>(nh, "beta", f.beta);
+  f.g0 = param<double>(nh, "g0", f.g0);
+  f.diffusion_scale = param<double>(nh, "diffusion_scale", f.diffusion_scale);
+  f.initial_spread_m = param<double>(nh, "initial_spread", f.initial_spread_m);
+  f.initial_spread_rad = param<double>(nh, "initial_spread_rad", f.initial_spread_rad);
+  f.reset_scores_on_resample =
+      param<bool>(nh, "reset_scores_on_resample", f.reset_scores_on_resample);
+  f.adapt_g0 = param<bool>(nh, "adapt_g0", f.adapt_g0);
+  f.latency_compensation_s = param<double>(nh, "latency_compensation", f.latency_compensation_s);
+  const std::string estimate = param<std::string>(
+      nh, "estimate", f.estimate == ebslam::PoseEstimateMode::kBestParticle ? "best" : "mean");
+  if (estimate == "mean") {
+    f.estimate = ebslam::PoseEstimateMode::kWeightedMean;
+  } else if (estimate == "best") {
+    f.estimate = ebslam::PoseEstimateMode::kBestParticle;
+  } else {
+    fail(nh, "estimate", "= '" + estimate + "' is not one of mean, best");
+  }
+  const int seed = param<int>(nh, "seed", static_cast<int>(f.seed));
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  f.seed = static_cast<std::uint64_t>(seed);
+  validateCore(nh, f);
+  return f;
+}
+
+PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
+  PoseFilterNodeConfig config;
+  config.sensor = loadCeilingSensorConfig(nh);
+  const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
+  config.initial_pose = {start[0], start[1], start[2]};
+  config.map_frame = param<std::string>(nh, "map_frame", config.map_frame);
+  config.odom_frame = param<std::string>(nh, "odom_frame", config.odom_frame);
+  config.base_frame = param<std::string>(nh, "base_frame", config.base_frame);
+  config.sensor_frame = param<std::string>(nh, "sensor_frame", config.sensor_frame);
+  config.odom_from_tf = param<bool>(nh, "odom_from_tf", config.odom_from_tf);
+  config.mount_from_tf = param<bool>(nh, "mount_from_tf", config.mount_from_tf);
+  config.mount_xyz = triple(nh, "mount_xyz", config.mount_xyz);
+  config.mount_rpy = triple(nh, "mount_rpy", config.mount_rpy);
+  config.publish_tf = param<bool>(nh, "publish_tf", config.publish_tf);
+  config.path_length = param<int>(nh, "path_length", config.path_length);
+  config.queue_size = param<int>(nh, "queue_size", config.queue_size);
+  config.max_backward_s = param<double>(nh, "max_backward", config.max_backward_s);
+  config.gap_warning_s = param<double>(nh, "gap_warning", config.gap_warning_s);
+  config.max_events_per_update =
+      param<int>(nh, "max_events_per_update", config.max_events_per_update);
+  requireFrame(nh, "map_frame", config.map_frame);
+  requireFrame(nh, "odom_frame", config.odom_frame);
+  requireFrame(nh, "base_frame", config.base_frame);
+  requireFrame(nh, "sensor_frame", config.sensor_frame);
+  if (config.map_frame == config.odom_frame || config.odom_frame == config.base_frame ||
+      config.base_frame == config.sensor_frame || config.map_frame == config.base_frame) {
+    fail(nh, "map_frame", "odom_frame, base_frame and sensor_frame must be four different frames");
+  }
+  if (config.path_length < 1) fail(nh, "path_length", "must be at least 1");
+  if (config.queue_size < 1) fail(nh, "queue_size", "must be at least 1");
+  if (!std::isfinite(config.max_backward_s) || config.max_backward_s < 0.0) {
+    fail(nh, "max_backward", "must be a non-negative number of seconds");
+  }
+  requirePositive(config.gap_warning_s, nh, "gap_warning");
+  if (config.max_events_per_update < 1000) fail(nh, "max_events_per_update", "must be >= 1000");
+  return config;
+}
+
+EventParticleFilterNodeConfig loadEventParticleFilterNodeConfig(const ros::NodeHandle& nh) {
+  EventParticleFilterNodeConfig config;
+  config.node = loadPoseFilterNodeConfig(nh);
+  config.filter.filter = loadEventFilterConfig(nh, config.filter.filter);
+  config.filter.gamma = param<double>(nh, "gamma", config.filter.gamma);
+  validateCore(nh, config.filter);
+  config.map_yaml = param<std::string>(nh, "map", config.map_yaml);
+  if (config.map_yaml.empty()) fail(nh, "map", "is not set (a ceiling map yaml)");
+  return config;
+}
+
+EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
+  EventSlam2dNodeConfig config;
+  config.node = loadPoseFilterNodeConfig(nh);
+  ebslam::Ebslam2dConfig& s = config.slam;
+  s.filter = loadEventFilterConfig(nh, s.filter);
+  s.cell_size_wtrig = param<double>(nh, "cell_size", s.cell_size_wtrig);
+  s.map_size_m = param<double>(nh, "map_size", s.map_size_m);
+  s.splat_sigma_wtrig = param<double>(nh, "splat_sigma", s.splat_sigma_wtrig);
+  s.normalisation_step_px = param<double>(nh, "normalisation_step", s.normalisation_step_px);
+  s.normalisation_prior_px = param<double>(nh, "normalisation_prior", s.normalisation_prior_px);
+  const std::string splat = param<std::string>(nh, "splat", "expected_pose");
+  if (splat == "expected_pose") {
+    s.splat = ebslam::OccurrenceSplat::kExpectedPose;
+  } else if (splat == "all_particles") {
+    s.splat = ebslam::OccurrenceSplat::kAllParticles;
+  } else {
+    fail(nh, "splat", "= '" + splat + "' is not one of expected_pose, all_particles");
+  }
+  validateCore(nh, s);
+  config.map_publish_period_s =
+      param<double>(nh, "map_publish_period", config.map_publish_period_s);
+  requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  return config;
+}
+
+EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
+                                                      const std::string& default_trajectory) {
+  EventSimulatorNodeConfig c;
+  c.trajectory = param<std::string>(nh, "trajectory", default_trajectory);
+  c.raw_camera_poses = param<bool>(nh, "raw_camera_poses", c.raw_camera_poses);
+  c.smoothing_half_window_s = param<double>(nh, "smoothing", c.smoothing_half_window_s);
+  c.texture = param<std::string>(nh, "texture", c.texture);
+  c.metres_per_texel = param<double>(nh, "texture_resolution", c.metres_per_texel);
+  const int texture_seed = param<int>(nh, "texture_seed", static_cast<int>(c.lines.seed));
+  c.lines.foreground = param<double>(nh, "line_intensity", c.lines.foreground);
+  const CeilingSensorConfig sensor = loadCeilingSensorConfig(nh);
+  c.simulator.camera = sensor.camera;
+  c.ceiling_height_m = sensor.ceiling_distance_m;
+  ebslam::EventModelConfig& e = c.simulator.events;
+  const int seed = param<int>(nh, "seed", static_cast<int>(e.seed));
+  e.contrast_threshold_on = e.contrast_threshold_off =
+      param<double>(nh, "contrast", e.contrast_threshold_on);
+  e.threshold_mismatch_sigma = param<double>(nh, "mismatch", e.threshold_mismatch_sigma);
+  e.refractory_period_us = param<double>(nh, "refractory_us", e.refractory_period_us);
+  e.noise_rate_hz_per_pixel = param<double>(nh, "noise_rate", e.noise_rate_hz_per_pixel);
+  c.t_begin_s = param<double>(nh, "t_begin", c.t_begin_s);
+  c.t_end_s = param<double>(nh, "t_end", c.t_end_s);
+  c.speed = param<double>(nh, "speed", c.speed);
+  c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
+  c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
+  c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
+  c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
+  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
+  c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
+  c.path_length = param<int>(nh, "path_length", c.path_length);
+  if (c.trajectory.empty()) fail(nh, "trajectory", "is not set");
+  if (texture_seed < 0) fail(nh, "texture_seed", "must not be negative");
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  c.lines.seed = static_cast<std::uint64_t>(texture_seed);
+  e.seed = static_cast<std::uint64_t>(seed);
+  requirePositive(c.metres_per_texel, nh, "texture_resolution");
+  requirePositive(c.speed, nh, "speed");
+  requirePositive(c.publish_rate_hz, nh, "publish_rate");
+  requirePositive(c.clock_start_s, nh, "clock_start");
+  if (!(c.lines.foreground >= 0.0 && c.lines.foreground <= 1.0)) {
+    fail(nh, "line_intensity", "must be in [0, 1]");
+  }
+  if (!std::isfinite(c.smoothing_half_window_s) || c.smoothing_half_window_s < 0.0) {
+    fail(nh, "smoothing", "must be >= 0 s");
+  }
+  if (!std::isfinite(c.t_begin_s) || c.t_begin_s < 0.0) fail(nh, "t_begin", "must be >= 0 s");
+  requireFrame(nh, "frame_id", c.frame_id);
+  requireFrame(nh, "map_frame", c.map_frame);
+  requireFrame(nh, "ground_truth_frame", c.ground_truth_frame);
+  if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
+  validateCore(nh, c.simulator);
+  return c;
+}
 
 EventFilePlayerConfig loadEventFilePlayerConfig(const ros::NodeHandle& nh) {
   EventFilePlayerConfig config;

@@ -12,6 +12,13 @@
 
 namespace ebslam_ros {
 
+/// ROS time -> microseconds since the ROS epoch (rounded to the nearest microsecond, exact
+/// integer arithmetic). The event filters run on this clock.
+std::int64_t toMicroseconds(const ros::Time& stamp);
+/// Microseconds since the ROS epoch -> ROS time; throws std::invalid_argument outside
+/// ros::Time's range.
+ros::Time fromMicroseconds(std::int64_t t_us);
+
 struct TimeAnchor {
   ros::Time ros_time;     ///< ROS time of the anchor event
   std::int64_t t_us = 0;  ///< stream time of the anchor event [us]

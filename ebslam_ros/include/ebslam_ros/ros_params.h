@@ -7,8 +7,17 @@
 #include <optional>
 #include <string>
 
+#include <array>
+#include <vector>
+
+#include <ebslam/camera_model.h>
+#include <ebslam/ebpf.h>
+#include <ebslam/ebslam2d.h>
 #include <ebslam/event.h>
 #include <ebslam/event_io.h>
+#include <ebslam/particles2d.h>
+#include <ebslam/simulator.h>
+#include <ebslam/simulator_scenes.h>
 
 namespace ebslam_ros {
 
@@ -29,5 +38,87 @@ struct EventFilePlayerConfig {
 };
 
 EventFilePlayerConfig loadEventFilePlayerConfig(const ros::NodeHandle& private_nh);
+
+/// The upward-looking eDVS (thesis 6.5.1): lens and ceiling distance.
+struct CeilingSensorConfig {
+  ebslam::CameraModel camera;        ///< ~camera/{width, height, focal_px, cx, cy, kappa1, kappa2}
+  double ceiling_distance_m = 2.59;  ///< ~ceiling_distance: sensor to ceiling D [m]
+};
+
+/// ROS side of EventParticleFilter and EventSlam2d (frames, mounting, output, input checks).
+struct PoseFilterNodeConfig {
+  CeilingSensorConfig sensor;
+  ebslam::Pose2 initial_pose;                       ///< ~initial_pose: base_link in map [m, m, rad]
+  std::string map_frame = "map";                    ///< ~map_frame
+  std::string odom_frame = "odom";                  ///< ~odom_frame
+  std::string base_frame = "base_link";             ///< ~base_frame
+  std::string sensor_frame = "edvs_optical_frame";  ///< ~sensor_frame: the events' frame
+  /// ~odom_from_tf: map -> odom = pose * (odom -> base_link from tf, e.g. wheel odometry);
+  /// false: the node publishes odom -> base_link as identity.
+  bool odom_from_tf = false;
+  /// ~mount_from_tf: base_link -> sensor_frame from tf; false: from ~mount_xyz, ~mount_rpy,
+  /// published by the node as a static transform.
+  bool mount_from_tf = false;
+  std::array<double, 3> mount_xyz{0.0, 0.0, 0.0};  ///< ~mount_xyz [m]
+  std::array<double, 3> mount_rpy{0.0, 0.0, 0.0};  ///< ~mount_rpy [rad]
+  bool publish_tf = true;                          ///< ~publish_tf: map -> odom (-> base_link)
+  int path_length = 10000;                         ///< ~path_length: poses kept on `path`
+  int queue_size = 1000;                           ///< ~queue_size: EventArray messages queued
+  double max_backward_s = 0.001;  ///< ~max_backward: earlier events are clamped up to this [s]
+  double gap_warning_s = 1.0;     ///< ~gap_warning: warn about pauses in the stream longer [s]
+  /// ~max_events_per_update: events per filter call and pose (a huge message gives several).
+  int max_events_per_update = 200000;
+};
+
+/// Common filter knobs (~num_particles, ~batch_size, ~resample_every, ~beta, ~g0,
+/// ~diffusion_scale, ~initial_spread, ~initial_spread_rad, ~reset_scores_on_resample,
+/// ~adapt_g0, ~estimate (mean|best), ~latency_compensation, ~seed) over `defaults`.
+ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& private_nh,
+                                                const ebslam::EventFilterConfig& defaults);
+PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& private_nh);
+CeilingSensorConfig loadCeilingSensorConfig(const ros::NodeHandle& private_nh);
+
+struct EventParticleFilterNodeConfig {
+  PoseFilterNodeConfig node;
+  ebslam::EbpfConfig filter;  ///< plus ~gamma (sensor model sigma [W_trig])
+  std::string map_yaml;       ///< ~map: ceiling map yaml (map_server style or simulator's)
+};
+EventParticleFilterNodeConfig loadEventParticleFilterNodeConfig(const ros::NodeHandle& private_nh);
+
+struct EventSlam2dNodeConfig {
+  PoseFilterNodeConfig node;
+  /// plus ~cell_size, ~map_size, ~splat_sigma, ~splat (expected_pose|all_particles),
+  /// ~normalisation_step, ~normalisation_prior
+  ebslam::Ebslam2dConfig slam;
+  double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
+};
+EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
+
+/// The floor-robot event simulator (thesis 6.5.3, as ebslam_simulate_events).
+struct EventSimulatorNodeConfig {
+  /// ~trajectory: TUM file; default: the demo's excerpt of freiburg2_pioneer_360 in the
+  /// repository (test/data/sample_session/pioneer_360_excerpt.txt).
+  std::string trajectory;
+  bool raw_camera_poses = false;          ///< ~raw_camera_poses: the file holds eDVS poses (z up)
+  double smoothing_half_window_s = 0.05;  ///< ~smoothing [s] (makeFloorRobotTrajectory)
+  std::string texture = "lines";          ///< ~texture: image file or "lines"
+  double metres_per_texel = 0.01;         ///< ~texture_resolution [m]
+  ebslam::LinesAndCirclesConfig lines;    ///< ~texture_seed, ~line_intensity
+  double ceiling_height_m = 2.59;         ///< ~ceiling_distance [m] (as the filters' parameter)
+  ebslam::SimulatorConfig simulator;      ///< ~camera/*, ~seed, ~contrast, ~noise_rate, ...
+  double t_begin_s = 0.0;                 ///< ~t_begin: start, seconds after the trajectory start
+  double t_end_s = -1.0;  ///< ~t_end: end, seconds after the start (< 0: the trajectory end)
+  double speed = 1.0;     ///< ~speed: simulated seconds per wall second
+  double publish_rate_hz = 100.0;     ///< ~publish_rate: EventArray per simulated second [Hz]
+  bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
+  double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the run's start with /clock [s]
+  bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  std::string frame_id = "edvs_optical_frame";      ///< ~frame_id
+  std::string map_frame = "map";                    ///< ~map_frame
+  std::string ground_truth_frame = "ground_truth";  ///< ~ground_truth_frame
+  int path_length = 10000;                          ///< ~path_length
+};
+EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& private_nh,
+                                                      const std::string& default_trajectory);
 
 }  // namespace ebslam_ros

@@ -67,6 +67,21 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
 
 void EventSlam2d::setG0(double g0) { schedule_ = makeG0Schedule(config_.filter, camera_, g0); }
 
+void EventSlam2d::setFilterConfig(const EventFilterConfig& filter) {
+  Ebslam2dConfig next = config_;
+  next.filter = filter;
+  next.validate();
+  const Pose2 current = estimate();
+  const bool count_changed = filter.num_particles != config_.filter.num_particles;
+  const double g0 = filter.adapt_g0 && config_.filter.adapt_g0 ? schedule_.g0 : filter.g0;
+  config_ = next;
+  setG0(g0);
+  if (count_changed) {
+    particles_.reset(filter.num_particles, current, filter.initial_spread_m,
+                     filter.initial_spread_rad, 1.0, filter.seed);
+  }
+}
+
 void EventSlam2d::process(const Event* events, std::size_t count) {
   if (count == 0) return;
   std::int64_t t = last_t_us_;

@@ -343,4 +343,25 @@ CeilingMap renderCeilingMap(const Scene& scene, const FloorRegion& region,
   return map;
 }
 
+Scene makeLinesCeilingScene(const FloorRegion& region, double metres_per_texel,
+                            LinesAndCirclesConfig lines, double ceiling_height_m) {
+  if (!(metres_per_texel > 0.0)) {
+    throw std::invalid_argument("makeLinesCeilingScene: metres_per_texel must be positive");
+  }
+  if (!(region.max.x() > region.min.x() && region.max.y() > region.min.y())) {
+    throw std::invalid_argument("makeLinesCeilingScene: empty region");
+  }
+  const LinesAndCirclesConfig defaults;
+  const double default_area = static_cast<double>(defaults.width_px) * defaults.height_px;
+  lines.width_px =
+      static_cast<int>(std::ceil((region.max.x() - region.min.x()) / metres_per_texel));
+  lines.height_px =
+      static_cast<int>(std::ceil((region.max.y() - region.min.y()) / metres_per_texel));
+  const double area_ratio = static_cast<double>(lines.width_px) * lines.height_px / default_area;
+  lines.line_count = static_cast<int>(std::lround(lines.line_count * area_ratio));
+  lines.circle_count = static_cast<int>(std::lround(lines.circle_count * area_ratio));
+  return makeCeilingScene(makeLinesAndCirclesTexture(lines), region, metres_per_texel,
+                          ceiling_height_m);
+}
+
 }  // namespace ebslam

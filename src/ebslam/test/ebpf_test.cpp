@@ -138,6 +138,30 @@ TEST(Ebpf, BadInputIsRejectedWithoutSideEffects) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+TEST(Ebpf, SetFilterConfigChangesKnobsAndKeepsThePose) {
+  const CeilingCamera camera(CameraModel{}, 2.59);
+  cv::Mat edges(100, 100, CV_8UC1, cv::Scalar(0));
+  edges.row(50).setTo(255);
+  const Pose2 start{0.2, -0.1, 0.3};
+  EventParticleFilter filter(EbpfConfig{}, camera,
+                             makeEdgeLikelihoodMap(edges, 0.05, {-2.5, -2.5}, 0.015), start);
+  EventFilterConfig bad = filter.config().filter;
+  bad.resample_every = 0;
+  EXPECT_THROW(filter.setFilterConfig(bad), std::invalid_argument);
+  EXPECT_EQ(filter.config().filter.resample_every, EbpfConfig{}.filter.resample_every);
+  EventFilterConfig changed = filter.config().filter;
+  changed.num_particles = 7;
+  changed.batch_size = 16;
+  filter.setFilterConfig(changed);
+  EXPECT_EQ(filter.particles().size(), 7);
+  EXPECT_NEAR(filter.estimate().x, start.x, 1e-6);
+  EXPECT_NEAR(filter.estimate().theta, start.theta, 1e-6);
+  EventVector events;
+  for (int i = 0; i < 40; ++i) events.push_back({i, static_cast<std::uint16_t>(i), 5, true});
+  filter.process(events);
+  EXPECT_EQ(filter.processedEvents(), 40u);
+}
+
 TEST(VelocityEstimator, RecoversAConstantVelocityAcrossTheHeadingWrap) {
   VelocityEstimator v(0.1);
   EXPECT_DOUBLE_EQ(v.velocity().x, 0.0);

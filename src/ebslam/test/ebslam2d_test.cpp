@@ -152,5 +152,42 @@ TEST(Ebslam2d, BadInputIsRejected) {
   EXPECT_EQ(mapToImage(slam.map()).at<std::uint8_t>(0, 0), 255);
 }
 
+// Runtime knobs change without losing the map; an invalid change throws and changes nothing.
+TEST(Ebslam2d, SetFilterConfigKeepsTheMap) {
+  const CeilingCamera camera(CameraModel{}, 2.59);
+  const testing::SyntheticCeiling ceiling = testing::makeSyntheticCeiling(5.0, 0.01, 5);
+  const auto path = [](double t) { return testing::loopPath(t, 0.6, 0.3); };
+  const EventVector events =
+      testing::generateSyntheticEvents(ceiling, camera, path, 0.0, 0.5, 0.15);
+  ASSERT_GT(events.size(), 1000u);
+  EventSlam2d slam(Ebslam2dConfig{}, camera, path(0.0));
+  const std::size_t half = events.size() / 2;
+  slam.process(events.data(), half);
+  const Pose2 before = slam.estimate();
+  double mass = 0.0;
+  for (float v : slam.occurrence().data) mass += v;
+  ASSERT_GT(mass, 0.0);
+
+  EventFilterConfig bad = slam.config().filter;
+  bad.batch_size = 0;
+  EXPECT_THROW(slam.setFilterConfig(bad), std::invalid_argument);
+  EXPECT_EQ(slam.config().filter.batch_size, Ebslam2dConfig{}.filter.batch_size);
+
+  EventFilterConfig changed = slam.config().filter;
+  changed.num_particles = 25;
+  changed.batch_size = 8;
+  changed.resample_every = 50;
+  slam.setFilterConfig(changed);
+  EXPECT_EQ(slam.particles().size(), 25);
+  EXPECT_EQ(slam.config().filter.batch_size, 8);
+  double mass_after = 0.0;
+  for (float v : slam.occurrence().data) mass_after += v;
+  EXPECT_DOUBLE_EQ(mass_after, mass);
+  EXPECT_NEAR(slam.estimate().x, before.x, 1e-3);
+  EXPECT_NEAR(slam.estimate().y, before.y, 1e-3);
+  slam.process(events.data() + half, events.size() - half);
+  EXPECT_EQ(slam.processedEvents(), events.size());
+}
+
 }  // namespace
 }  // namespace ebslam

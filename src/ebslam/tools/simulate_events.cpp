@@ -69,27 +69,18 @@ int run(const Options& options, ebslam::SimulatorConfig config,
 
   const ebslam::FloorRegion region =
       ebslam::visibleCeilingRegion(camera_path, config.camera, options.ceiling_height_m);
-  cv::Mat texture;
+  ebslam::Scene scene;
   if (options.texture == "lines") {
-    // Size the procedural texture to the region with the default feature density.
-    const ebslam::LinesAndCirclesConfig defaults;
-    const double default_area = static_cast<double>(defaults.width_px) * defaults.height_px;
-    lines.width_px =
-        static_cast<int>(std::ceil((region.max.x() - region.min.x()) / options.metres_per_texel));
-    lines.height_px =
-        static_cast<int>(std::ceil((region.max.y() - region.min.y()) / options.metres_per_texel));
-    const double area_ratio = static_cast<double>(lines.width_px) * lines.height_px / default_area;
-    lines.line_count = static_cast<int>(std::lround(lines.line_count * area_ratio));
-    lines.circle_count = static_cast<int>(std::lround(lines.circle_count * area_ratio));
-    texture = ebslam::makeLinesAndCirclesTexture(lines);
+    scene = ebslam::makeLinesCeilingScene(region, options.metres_per_texel, lines,
+                                          options.ceiling_height_m);
   } else {
-    texture = cv::imread(options.texture, cv::IMREAD_UNCHANGED);
+    const cv::Mat texture = cv::imread(options.texture, cv::IMREAD_UNCHANGED);
     if (texture.empty()) {
       throw std::runtime_error("cannot read texture image " + options.texture);
     }
+    scene = ebslam::makeCeilingScene(texture, region, options.metres_per_texel,
+                                     options.ceiling_height_m);
   }
-  const ebslam::Scene scene =
-      ebslam::makeCeilingScene(texture, region, options.metres_per_texel, options.ceiling_height_m);
 
   const ebslam::SensorSize sensor{static_cast<std::uint32_t>(config.camera.width),
                                   static_cast<std::uint32_t>(config.camera.height)};

@@ -183,6 +183,12 @@ class EventParticleFilter {
   Pose2 estimate() const;
   /// The filtered pose without latency compensation.
   Pose2 rawEstimate() const;
+  /// Changes the runtime knobs (particle count N, batch size B, resampling interval K, ...)
+  /// without losing the filter's state: a changed N restarts the particles at the current
+  /// estimate with the new config's initial spread; the G0 schedule follows the new config
+  /// (an adapted G0 is kept). Throws std::invalid_argument (and changes nothing) for an invalid
+  /// config.
+  void setFilterConfig(const EventFilterConfig& filter);
   const ParticleSet2D& particles() const { return particles_; }
   std::uint64_t processedEvents() const { return processed_; }
   double alpha() const { return schedule_.alpha; }

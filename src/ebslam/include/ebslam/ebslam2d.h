@@ -88,6 +88,9 @@ class EventSlam2d {
   std::uint64_t normalisationUpdates() const { return normalisation_updates_; }
   double alpha() const { return schedule_.alpha; }
   const Ebslam2dConfig& config() const { return config_; }
+  /// Changes the localisation's runtime knobs without losing the map; as
+  /// EventParticleFilter::setFilterConfig.
+  void setFilterConfig(const EventFilterConfig& filter);
   double g0() const { return schedule_.g0; }
 
  private:

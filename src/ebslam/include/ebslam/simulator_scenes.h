@@ -101,6 +101,14 @@ struct LinesAndCirclesConfig {
 };
 cv::Mat makeLinesAndCirclesTexture(const LinesAndCirclesConfig& config = {});
 
+/// The procedural ceiling over `region` (ebslam_simulate_events --texture lines): the texture
+/// is sized to the region at `metres_per_texel` and the line and circle counts of `lines` are
+/// scaled with its area relative to the default 1024 x 1024 texels (same feature density).
+/// Throws std::invalid_argument for an empty region or a non-positive texel size.
+Scene makeLinesCeilingScene(const FloorRegion& region, double metres_per_texel,
+                            LinesAndCirclesConfig lines = {},
+                            double ceiling_height_m = kThesisCeilingHeightM);
+
 /// A known ceiling map for EB-PF (thesis fig. 6.8): the ceiling as seen from below, rendered
 /// orthographically at metres_per_pixel, and its Canny edge image.
 struct CeilingMap {

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# "Same results through ROS" bar: the simulator nodelet -> EventSlam2d / EventParticleFilter in one
+# manager on /clock at SPEED x real time, recorded, converted with bag_to_tum and scored with
+# ebslam_evaluate_trajectory, beside the offline ebslam_run_ebslam2d / ebslam_run_ebpf on the same
+# events (ebslam_simulate_events with the same trajectory, scene and seed).
+#   ebslam_ros/scripts/same_results.sh TUM_TRAJECTORY OUT_DIR [SPEED] [SEED]
+set -eo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+trajectory=${1:?TUM trajectory}
+out=${2:?output folder}
+speed=${3:-10}
+seed=${4:-1}
+source "${repo}/scripts/ros_env.sh"
+set +u
+source "${WS_DIR:-${repo}/.ws}/devel/setup.bash"
+export ROS_HOSTNAME=localhost
+bin="${WS_DIR:-${repo}/.ws}/build/ebslam"
+mkdir -p "${out}"
+cd "${out}"
+
+"${bin}/ebslam_simulate_events" --trajectory "${trajectory}" --seed "${seed}" --events events.ebe \
+  --groundtruth groundtruth.tum --map ceiling >simulate.log
+grep '^events:' simulate.log
+ox=$(sed -n 's/^origin_x_m: *//p' ceiling.yaml)
+oy=$(sed -n 's/^origin_y_m: *//p' ceiling.yaml)
+"${bin}/ebslam_run_ebslam2d" events.ebe --start-from groundtruth.tum --g0 30 -o slam_offline.tum | tail -1
+"${bin}/ebslam_run_ebpf" events.ebe --edges ceiling_edges.png --map-origin "${ox}" "${oy}" \
+  --start-from groundtruth.tum --g0 60 -o ebpf_offline.tum | tail -1
+start=$(/usr/bin/python3 -c "
+import math
+for line in open('groundtruth.tum'):
+    if line.startswith('#'): continue
+    t, x, y, z, qx, qy, qz, qw = map(float, line.split())
+    print('[%.9f, %.9f, %.9f]' % (x, y, 2 * math.atan2(qz, qw))); break")
+
+port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://localhost:${port}
+for filter in slam ebpf; do
+  rm -f "${filter}.bag"
+  roslaunch -p "${port}" ebslam_ros simulated_localisation.launch filter:="${filter}" speed:="${speed}" \
+    seed:="${seed}" trajectory:="${trajectory}" initial_pose:="${start}" map:="${out}/ceiling.yaml" \
+    bag:="${out}/${filter}.bag" >"${filter}_launch.log" 2>&1 &
+  launch=$!
+  start_wall=${SECONDS}
+  until grep -q "simulation done" "${filter}_launch.log"; do
+    sleep 1
+    if ! kill -0 "${launch}" 2>/dev/null; then echo "roslaunch ended early: ${filter}_launch.log"; exit 1; fi
+  done
+  echo "${filter}: simulation done after $((SECONDS - start_wall)) s wall"
+  sleep 20  # the filter drains its queue, rosbag writes
+  kill -INT "${launch}"
+  wait "${launch}" || true
+  rosrun ebslam_ros bag_to_tum "${filter}.bag" /pose "${filter}_ros.tum"
+  rosrun ebslam_ros bag_to_tum "${filter}.bag" /ground_truth/pose "${filter}_ros_groundtruth.tum"
+done
+for filter in slam ebpf; do
+  echo "== ${filter} offline:"
+  "${bin}/ebslam_evaluate_trajectory" --no-time-offset "${filter}_offline.tum" groundtruth.tum | grep RMSE
+  echo "== ${filter} through ROS (${speed}x, /clock):"
+  "${bin}/ebslam_evaluate_trajectory" --no-time-offset "${filter}_ros.tum" "${filter}_ros_groundtruth.tum" | grep RMSE
+done

@@ -1,0 +1,45 @@
+#include "ebslam_ros/event_input.h"
+
+#include "ebslam_ros/conversions.h"
+
+namespace ebslam_ros {
+
+EventInputResult EventInputGuard::take(const ebslam_msgs::EventArray& msg) {
+  EventInputResult result;
+  if (msg.events.empty()) return result;
+  if (msg.width != sensor_.width || msg.height != sensor_.height) {
+    result.size_mismatch = true;
+    return result;
+  }
+  result.segments.emplace_back();
+  result.segments.back().events.reserve(msg.events.size());
+  bool first = true;
+  for (const ebslam_msgs::Event& e : msg.events) {
+    if (e.x >= sensor_.width || e.y >= sensor_.height) {
+      ++result.outside;
+      continue;
+    }
+    std::int64_t t_us = toMicroseconds(e.ts);
+    if (last_t_us_ != kNoTime) {
+      if (t_us < last_t_us_) {
+        if (last_t_us_ - t_us <= max_backward_us_) {
+          t_us = last_t_us_;
+          ++result.clamped;
+        } else {
+          if (!result.segments.back().events.empty()) result.segments.emplace_back();
+          result.segments.back().restart = true;
+          result.segments.back().jump_back_us = last_t_us_ - t_us;
+        }
+      } else if (first && t_us - last_t_us_ > gap_warning_us_) {
+        result.gap_us = t_us - last_t_us_;
+      }
+    }
+    first = false;
+    last_t_us_ = t_us;
+    result.segments.back().events.push_back({t_us, e.x, e.y, static_cast<bool>(e.polarity)});
+  }
+  if (result.segments.back().events.empty()) result.segments.pop_back();
+  return result;
+}
+
+}  // namespace ebslam_ros

@@ -1,0 +1,77 @@
+// EB-PF (thesis 6.4-6.5): localisation of an upward-looking eDVS under a ceiling with a known
+// edge map. Topics, frames and services: PoseFilterNode (pose_filter_node.h) and README.md.
+// The map (~map) is a yaml in map_server's or ebslam_simulate_events' layout (ceiling_map_io.h).
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+
+#include <ebslam/ceiling_camera.h>
+#include <ebslam/ebpf.h>
+
+#include <memory>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "ebslam_ros/ceiling_map_io.h"
+#include "ebslam_ros/pose_filter_node.h"
+#include "ebslam_ros/ros_params.h"
+
+namespace ebslam_ros {
+
+class EventParticleFilterNodelet : public nodelet::Nodelet {
+ private:
+  class Backend : public PoseFilterBackend {
+   public:
+    Backend(const ebslam::EbpfConfig& config, const ebslam::CeilingCamera& camera,
+            ebslam::GridMap2f likelihood, const ebslam::Pose2& start)
+        : filter_(config, camera, std::move(likelihood), start) {}
+    void process(const ebslam::Event* events, std::size_t count) override {
+      filter_.process(events, count);
+    }
+    ebslam::Pose2 estimate() const override { return filter_.estimate(); }
+    const ebslam::ParticleSet2D& particles() const override { return filter_.particles(); }
+    const ebslam::EventFilterConfig& filterConfig() const override {
+      return filter_.config().filter;
+    }
+    void setFilterConfig(const ebslam::EventFilterConfig& config) override {
+      filter_.setFilterConfig(config);
+    }
+    double g0() const override { return filter_.g0(); }
+    std::uint64_t processedEvents() const override { return filter_.processedEvents(); }
+
+   private:
+    ebslam::EventParticleFilter filter_;
+  };
+
+  void onInit() override {
+    try {
+      const EventParticleFilterNodeConfig config =
+          loadEventParticleFilterNodeConfig(getPrivateNodeHandle());
+      const ebslam::CeilingCamera camera(config.node.sensor.camera,
+                                         config.node.sensor.ceiling_distance_m);
+      const CeilingEdgeMap map = loadCeilingMap(config.map_yaml);
+      likelihood_ = ebslam::makeEdgeLikelihoodMap(map.edges, map.resolution_m, map.origin_centre_m,
+                                                  config.filter.gamma * camera.wTrig());
+      NODELET_INFO("EB-PF on ceiling map '%s' (%dx%d cells of %.3f m), N=%d B=%d K=%d",
+                   config.map_yaml.c_str(), map.edges.cols, map.edges.rows, map.resolution_m,
+                   config.filter.filter.num_particles, config.filter.filter.batch_size,
+                   config.filter.filter.resample_every);
+      const ebslam::EbpfConfig ebpf = config.filter;
+      node_ = std::make_unique<PoseFilterNode>(
+          getNodeHandle(), getPrivateNodeHandle(), config.node, ebpf.filter,
+          [this, ebpf, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
+            ebslam::EbpfConfig c = ebpf;
+            c.filter = knobs;
+            return std::make_unique<Backend>(c, camera, likelihood_, start);
+          },
+          getName());
+    } catch (const std::exception& error) {
+      NODELET_ERROR("EventParticleFilter not started: %s", error.what());
+    }
+  }
+
+  ebslam::GridMap2f likelihood_;
+  std::unique_ptr<PoseFilterNode> node_;
+};
+
+}  // namespace ebslam_ros
+
+PLUGINLIB_EXPORT_CLASS(ebslam_ros::EventParticleFilterNodelet, nodelet::Nodelet)

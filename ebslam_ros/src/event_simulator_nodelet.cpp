@@ -1,0 +1,229 @@
+// Simulated eDVS on a floor robot under a textured ceiling (thesis 6.5.3; the scene and event
+// model of ebslam_simulate_events with the same parameters and seeds, so both give the same
+// events). Publications (relative names):
+//  - events (ebslam_msgs/EventArray): ~publish_rate messages per simulated second, in
+//    ~frame_id, width x height of ~camera; header.stamp = ts of the last event;
+//  - ground_truth/pose (geometry_msgs/PoseStamped), ground_truth/path (nav_msgs/Path, bounded):
+//    the sensor's optical frame in ~map_frame at each message's end, and the tf
+//    ~map_frame -> ~ground_truth_frame (its own frame, so it never fights the estimators' tf);
+//  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+// Time: a simulated time t [s since the trajectory's start] is stamped anchor + t, the anchor
+// being ~clock_start with /clock, else the wall time at the start (then stamps advance with
+// t / ~speed, as the event file player). Pacing: the message for t is sent at
+// wall_start + t / ~speed (or as soon as simulated when the simulator is slower than that).
+// The simulation runs in a thread of its own; the nodelet stops it on unload.
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <ros/package.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <ebslam/simulator.h>
+#include <ebslam/simulator_scenes.h>
+#include <ebslam/trajectory.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <atomic>
+#include <deque>
+#include <memory>
+#include <pluginlib/class_list_macros.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "ebslam_ros/conversions.h"
+#include "ebslam_ros/ros_params.h"
+
+namespace ebslam_ros {
+
+class EventSimulatorNodelet : public nodelet::Nodelet {
+ public:
+  ~EventSimulatorNodelet() override {
+    stop_ = true;
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  struct Stopped {};  // thrown from the sink to end the simulation early
+
+  void onInit() override {
+    const std::string package = ros::package::getPath("ebslam_ros");
+    const std::string default_trajectory =
+        package.empty() ? "" : package + "/../test/data/sample_session/pioneer_360_excerpt.txt";
+    try {
+      config_ = loadEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
+      prepare();
+    } catch (const std::exception& error) {
+      NODELET_ERROR("event simulator not started: %s", error.what());
+      return;
+    }
+    ros::NodeHandle& nh = getNodeHandle();
+    events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
+    path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
+    if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    NODELET_INFO("simulating '%s' from %.2f to %.2f s at %.2fx%s", config_.trajectory.c_str(),
+                 t_begin_ - path_.front().t_s, t_end_ - path_.front().t_s, config_.speed,
+                 config_.publish_clock ? " with /clock" : "");
+    worker_ = std::thread([this] { run(); });
+  }
+
+  void prepare() {
+    const ebslam::Trajectory input = ebslam::readTumTrajectory(config_.trajectory);
+    if (input.size() < 2) {
+      throw std::invalid_argument("trajectory '" + config_.trajectory +
+                                  "' holds fewer than two poses");
+    }
+    if (config_.raw_camera_poses) {
+      path_ = input;
+    } else {
+      ebslam::FloorRobotTrajectoryConfig floor;
+      floor.smoothing_half_window_s = config_.smoothing_half_window_s;
+      path_ = ebslam::makeFloorRobotTrajectory(input, floor);
+    }
+    const double t0 = path_.front().t_s;
+    t_begin_ = t0 + config_.t_begin_s;
+    t_end_ = config_.t_end_s < 0.0 ? path_.back().t_s : t0 + config_.t_end_s;
+    if (!(t_begin_ < t_end_) || t_end_ > path_.back().t_s) {
+      throw std::invalid_argument("~t_begin..~t_end is empty or beyond the trajectory (" +
+                                  std::to_string(path_.back().t_s - t0) + " s long)");
+    }
+    const ebslam::FloorRegion region =
+        ebslam::visibleCeilingRegion(path_, config_.simulator.camera, config_.ceiling_height_m);
+    if (config_.texture == "lines") {
+      scene_ = ebslam::makeLinesCeilingScene(region, config_.metres_per_texel, config_.lines,
+                                             config_.ceiling_height_m);
+    } else {
+      const cv::Mat texture = cv::imread(config_.texture, cv::IMREAD_UNCHANGED);
+      if (texture.empty()) {
+        throw std::runtime_error("cannot read ~texture image '" + config_.texture + "'");
+      }
+      scene_ = ebslam::makeCeilingScene(texture, region, config_.metres_per_texel,
+                                        config_.ceiling_height_m);
+    }
+    simulator_ = std::make_unique<ebslam::EventSimulator>(config_.simulator);
+  }
+
+  void run() {
+    if (config_.wait_for_subscribers) {
+      // roscpp counts a subscriber before its side of the connection is ready.
+      while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
+      ros::WallDuration(0.5).sleep();
+    }
+    if (stop_) return;
+    const double stamp_speed = config_.publish_clock ? 1.0 : config_.speed;
+    const ros::Time anchor_time =
+        config_.publish_clock ? ros::Time(config_.clock_start_s) : ros::Time::now();
+    // Stream time of the simulator is round(t_s * 1e6) on the trajectory clock.
+    anchor_ = TimeAnchor{anchor_time, std::llround(t_begin_ * 1e6), stamp_speed};
+    wall_start_ = ros::WallTime::now();
+    next_boundary_us_ = std::llround(t_begin_ * 1e6) + periodUs();
+    if (config_.publish_clock) publishClock(anchor_time);
+    const ebslam::SensorSize sensor{static_cast<std::uint32_t>(config_.simulator.camera.width),
+                                    static_cast<std::uint32_t>(config_.simulator.camera.height)};
+    try {
+      const ebslam::SimulationResult result = simulator_->simulate(
+          scene_, path_, t_begin_, t_end_, [&](const ebslam::EventVector& events) {
+            if (stop_) throw Stopped{};
+            for (const ebslam::Event& e : events) {
+              while (e.t_us >= next_boundary_us_) flush(sensor);
+              pending_.push_back(e);
+            }
+          });
+      flush(sensor);
+      NODELET_INFO("simulation done: %zu events (%zu signal, %zu noise) in %u messages",
+                   result.signal_events + result.noise_events, result.signal_events,
+                   result.noise_events, sequence_);
+    } catch (const Stopped&) {
+    } catch (const std::exception& error) {
+      NODELET_ERROR("simulation failed: %s", error.what());
+    }
+  }
+
+  std::int64_t periodUs() const { return std::llround(1e6 / config_.publish_rate_hz); }
+
+  // Publishes the events before next_boundary_us_ (the message's end) once its time has come.
+  void flush(const ebslam::SensorSize& sensor) {
+    const std::int64_t end_us = next_boundary_us_;
+    next_boundary_us_ += periodUs();
+    const double t_end_s = 1e-6 * static_cast<double>(end_us);
+    const ros::WallTime due = wall_start_ + ros::WallDuration((t_end_s - t_begin_) / config_.speed);
+    while (!stop_) {
+      const ros::WallTime now = ros::WallTime::now();
+      if (now >= due) break;
+      (due - now).sleep();
+    }
+    if (stop_) throw Stopped{};
+    const ros::Time stamp_end = toRosTime(end_us, anchor_);
+    if (config_.publish_clock) publishClock(stamp_end);
+    if (!pending_.empty()) {
+      ebslam_msgs::EventArray msg = toEventArrayMsg(pending_, sensor, config_.frame_id, anchor_);
+      msg.header.seq = sequence_++;
+      events_pub_.publish(msg);
+      pending_.clear();
+    }
+    publishGroundTruth(std::min(t_end_s, t_end_), stamp_end);
+  }
+
+  void publishClock(const ros::Time& time) {
+    rosgraph_msgs::Clock clock;
+    clock.clock = time;
+    clock_pub_.publish(clock);
+  }
+
+  void publishGroundTruth(double t_s, const ros::Time& stamp) {
+    const ebslam::StampedPose pose = ebslam::interpolatePose(path_, t_s);
+    geometry_msgs::PoseStamped msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = config_.map_frame;
+    msg.pose.position.x = pose.position.x();
+    msg.pose.position.y = pose.position.y();
+    msg.pose.position.z = pose.position.z();
+    msg.pose.orientation.x = pose.orientation.x();
+    msg.pose.orientation.y = pose.orientation.y();
+    msg.pose.orientation.z = pose.orientation.z();
+    msg.pose.orientation.w = pose.orientation.w();
+    pose_pub_.publish(msg);
+    geometry_msgs::TransformStamped tf;
+    tf.header = msg.header;
+    tf.child_frame_id = config_.ground_truth_frame;
+    tf.transform.translation.x = msg.pose.position.x;
+    tf.transform.translation.y = msg.pose.position.y;
+    tf.transform.translation.z = msg.pose.position.z;
+    tf.transform.rotation = msg.pose.orientation;
+    tf_broadcaster_.sendTransform(tf);
+    ground_truth_path_.push_back(msg);
+    while (ground_truth_path_.size() > static_cast<std::size_t>(config_.path_length)) {
+      ground_truth_path_.pop_front();
+    }
+    if (path_pub_.getNumSubscribers() > 0 && sequence_ % 10 == 0) {
+      nav_msgs::Path path;
+      path.header = msg.header;
+      path.poses.assign(ground_truth_path_.begin(), ground_truth_path_.end());
+      path_pub_.publish(path);
+    }
+  }
+
+  EventSimulatorNodeConfig config_;
+  ebslam::Trajectory path_;
+  ebslam::Scene scene_;
+  std::unique_ptr<ebslam::EventSimulator> simulator_;
+  double t_begin_ = 0.0, t_end_ = 0.0;
+  TimeAnchor anchor_;
+  ros::WallTime wall_start_;
+  std::int64_t next_boundary_us_ = 0;
+  ebslam::EventVector pending_;
+  std::uint32_t sequence_ = 0;
+  std::deque<geometry_msgs::PoseStamped> ground_truth_path_;
+  ros::Publisher events_pub_, pose_pub_, path_pub_, clock_pub_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  std::atomic<bool> stop_{false};
+  std::thread worker_;
+};
+
+}  // namespace ebslam_ros
+
+PLUGINLIB_EXPORT_CLASS(ebslam_ros::EventSimulatorNodelet, nodelet::Nodelet)

@@ -1,0 +1,391 @@
+// rostest of the EventParticleFilter and EventSlam2d nodelets (event_particle_filter.test,
+// event_slam2d.test, event_particle_filter_bad_map.test). The test publishes the events a
+// static upward-looking eDVS sees under test/data/ceiling_lines.yaml (lines at known
+// positions) and asserts the outputs' content, frame and stamp, the tf tree, the services, and
+// that injected bad input is dropped with the node running on.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ebslam_msgs/EventArray.h>
+#include <ebslam_msgs/ResetPose.h>
+#include <ebslam_msgs/SaveMap.h>
+#include <geometry_msgs/PoseArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <tf2/utils.h>
+#include <tf2_ros/transform_listener.h>
+#include <unistd.h>
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "ebslam_ros/ceiling_map_io.h"
+#include "ebslam_ros/conversions.h"
+
+namespace {
+
+// The scene of test/data/ceiling_lines.yaml and the default camera (f = 2.59 / 0.03 px,
+// c = 63.5 px, D = 2.59 m), mounted as in the .test files (mount_xyz = [0.1, 0, 0.3]).
+const std::vector<double> kLinesX{-2.3, -1.5, -0.85, -0.2, 0.55, 1.3, 2.1};
+const std::vector<double> kLinesY{-2.6, -1.7, -0.9, -0.35, 0.4, 1.15, 1.9, 2.5};
+constexpr double kStartX = 0.1, kStartY = -0.2, kStartTheta = 0.3;  // base_link, from .test
+constexpr double kMountX = 0.1;
+constexpr std::int64_t kT0 = 1700000000000000;  // [us]
+
+// Pixels that see a line when base_link is at (x, y, theta).
+std::vector<std::pair<int, int>> edgePixels(double x, double y, double theta) {
+  const double f = 2.59 / 0.03, w = 2.59 / f;
+  const double c = std::cos(theta), s = std::sin(theta);
+  const double sx = x + c * kMountX, sy = y + s * kMountX;
+  std::vector<std::pair<int, int>> pixels;
+  for (int v = 0; v < 128; ++v) {
+    for (int u = 0; u < 128; ++u) {
+      const double dx = (u - 63.5) * w, dy = (v - 63.5) * w;
+      const double wx = sx + c * dx - s * dy, wy = sy + s * dx + c * dy;
+      bool edge = false;
+      for (double a : kLinesX) edge = edge || std::abs(wx - a) < 0.012;
+      for (double b : kLinesY) edge = edge || std::abs(wy - b) < 0.012;
+      if (edge) pixels.emplace_back(u, v);
+    }
+  }
+  // A static sensor fires in no particular order; a raster order would look like motion.
+  std::shuffle(pixels.begin(), pixels.end(), std::mt19937(1));
+  return pixels;
+}
+
+// Event time shared by all tests of one run, so that a test never sends the filter back in
+// time unless it means to.
+std::int64_t g_next_t = kT0;
+
+class PoseFilterTest : public ::testing::Test {
+ public:
+  void SetUp() override {
+    events_pub_ = nh_.advertise<ebslam_msgs::EventArray>("events", 100);
+    pose_sub_ = nh_.subscribe("pose", 1000, &PoseFilterTest::onPose, this);
+    pixels_ = edgePixels(kStartX, kStartY, kStartTheta);
+    ASSERT_GT(pixels_.size(), 500u);
+    waitFor([&] { return events_pub_.getNumSubscribers() > 0; }, 10.0);
+    ASSERT_GT(events_pub_.getNumSubscribers(), 0u) << "the filter nodelet did not subscribe";
+    ros::WallDuration(0.3).sleep();
+  }
+
+  template <typename Predicate>
+  static bool waitFor(Predicate done, double seconds) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    while (!done() && ros::WallTime::now() < end) {
+      ros::spinOnce();
+      ros::WallDuration(0.005).sleep();
+    }
+    return done();
+  }
+
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+    poses_.push_back(*msg);
+  }
+
+  // One message with `count` events cycling over the edge pixels, from t_us in steps of dt_us.
+  ebslam_msgs::EventArray makeEvents(std::int64_t t_us, std::size_t count, std::int64_t dt_us = 20,
+                                     std::uint32_t size = 128) {
+    ebslam_msgs::EventArray msg;
+    msg.header.frame_id = "edvs_optical_frame";
+    msg.width = msg.height = size;
+    msg.events.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto& p = pixels_[(cursor_++) % pixels_.size()];
+      ebslam_msgs::Event& e = msg.events[i];
+      e.x = static_cast<std::uint16_t>(p.first);
+      e.y = static_cast<std::uint16_t>(p.second);
+      e.ts = ebslam_ros::fromMicroseconds(t_us + static_cast<std::int64_t>(i) * dt_us);
+      e.polarity = (i & 1u) != 0;
+    }
+    if (count > 0) msg.header.stamp = msg.events.back().ts;
+    return msg;
+  }
+
+  // Publishes and waits for the pose stamped with the message's last event.
+  bool publishAndAwait(const ebslam_msgs::EventArray& msg, double seconds = 5.0) {
+    events_pub_.publish(msg);
+    const ros::Time stamp = msg.events.back().ts;
+    return waitFor([&] { return !poses_.empty() && poses_.back().header.stamp == stamp; }, seconds);
+  }
+
+  // Publishes `n` messages of 2000 events at 100 Hz of event time from t_us; returns the end.
+  std::int64_t feed(std::int64_t t_us, int n) {
+    for (int k = 0; k < n; ++k) {
+      EXPECT_TRUE(publishAndAwait(makeEvents(t_us, 2000, 5))) << "no pose for message " << k;
+      t_us += 10000;
+    }
+    g_next_t = std::max(g_next_t, t_us);
+    return t_us;
+  }
+
+  // ~pose_tolerance [m]: EB-PF holds the pose on the known map; EB-SLAM-2D's map is built
+  // from its own estimate, so a static sensor's pose wanders a little.
+  static void expectNear(const geometry_msgs::Pose& pose, double x, double y, double theta,
+                         double tolerance_m) {
+    double scale = 1.0;
+    ros::param::get("~tolerance_scale", scale);
+    tolerance_m *= scale;
+    EXPECT_NEAR(pose.position.x, x, tolerance_m);
+    EXPECT_NEAR(pose.position.y, y, tolerance_m);
+    EXPECT_NEAR(std::remainder(tf2::getYaw(pose.orientation) - theta, 2 * M_PI), 0.0, 0.05);
+  }
+
+  ros::NodeHandle nh_;
+  ros::Publisher events_pub_;
+  ros::Subscriber pose_sub_;
+  std::vector<geometry_msgs::PoseWithCovarianceStamped> poses_;
+  std::vector<std::pair<int, int>> pixels_;
+  std::size_t cursor_ = 0;
+};
+
+TEST_F(PoseFilterTest, PosesCarryTheLastEventsStampMapFrameAndSpread) {
+  const std::int64_t end = feed(g_next_t, 20);
+  const auto& last = poses_.back();
+  EXPECT_EQ(last.header.frame_id, "map");
+  EXPECT_EQ(ebslam_ros::toMicroseconds(last.header.stamp), end - 10000 + 1999 * 5);
+  expectNear(last.pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+  const auto& c = last.pose.covariance;
+  EXPECT_GT(c[0], 0.0);
+  EXPECT_GT(c[7], 0.0);
+  EXPECT_GT(c[35], 0.0);
+  EXPECT_LT(c[0], 0.01);  // particles within ~10 cm
+  EXPECT_DOUBLE_EQ(c[1], c[6]);
+  EXPECT_LE(c[1] * c[1], c[0] * c[7] * (1 + 1e-9));
+}
+
+TEST_F(PoseFilterTest, TfTreeRunsMapOdomBaseLinkSensorWithoutGaps) {
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener(buffer);
+  ros::WallDuration(1.0).sleep();  // the listener connects to the filter's tf publisher
+  feed(g_next_t, 10);
+  const ros::Time stamp = poses_.back().header.stamp;
+  std::string error;
+  ASSERT_TRUE(
+      waitFor([&] { return buffer.canTransform("map", "edvs_optical_frame", stamp); }, 5.0));
+  std::string parent;
+  ASSERT_TRUE(buffer._getParent("edvs_optical_frame", stamp, parent));
+  EXPECT_EQ(parent, "base_link");
+  ASSERT_TRUE(buffer._getParent("base_link", stamp, parent));
+  EXPECT_EQ(parent, "odom");
+  ASSERT_TRUE(buffer._getParent("odom", stamp, parent));
+  EXPECT_EQ(parent, "map");
+  EXPECT_FALSE(buffer._getParent("map", stamp, parent));
+  // map -> base_link agrees with the pose, and the sensor sits on the mount.
+  const auto base = buffer.lookupTransform("map", "base_link", stamp);
+  EXPECT_NEAR(base.transform.translation.x, poses_.back().pose.pose.position.x, 1e-9);
+  EXPECT_NEAR(base.transform.translation.z, 0.0, 1e-9);
+  const auto sensor = buffer.lookupTransform("base_link", "edvs_optical_frame", stamp);
+  EXPECT_NEAR(sensor.transform.translation.x, kMountX, 1e-9);
+  EXPECT_NEAR(sensor.transform.translation.z, 0.3, 1e-9);
+}
+
+TEST_F(PoseFilterTest, LazyParticlesAndBoundedPath) {
+  std::vector<geometry_msgs::PoseArray> particles;
+  std::vector<nav_msgs::Path> paths;
+  auto particles_sub = nh_.subscribe<geometry_msgs::PoseArray>(
+      "particles", 10,
+      [&](const geometry_msgs::PoseArray::ConstPtr& m) { particles.push_back(*m); });
+  auto path_sub = nh_.subscribe<nav_msgs::Path>(
+      "path", 10, [&](const nav_msgs::Path::ConstPtr& m) { paths.push_back(*m); });
+  waitFor([&] { return particles_sub.getNumPublishers() > 0 && path_sub.getNumPublishers() > 0; },
+          5.0);
+  ros::WallDuration(0.3).sleep();
+  int num_particles = 0;
+  ros::param::get("~expected_particles", num_particles);
+  std::int64_t t = g_next_t;
+  for (int k = 0; k < 30 && (particles.empty() || paths.empty()); ++k) {
+    t = feed(t, 1);
+    ros::WallDuration(0.11).sleep();  // path: at most every 0.1 s
+  }
+  waitFor([&] { return !particles.empty() && !paths.empty(); }, 3.0);
+  ASSERT_FALSE(particles.empty());
+  EXPECT_EQ(particles.back().header.frame_id, "map");
+  EXPECT_EQ(static_cast<int>(particles.back().poses.size()), num_particles);
+  ASSERT_FALSE(paths.empty());
+  EXPECT_EQ(paths.back().header.frame_id, "map");
+  EXPECT_LE(paths.back().poses.size(), 50u);  // ~path_length in the .test files
+  EXPECT_GT(paths.back().poses.size(), 1u);
+}
+
+TEST_F(PoseFilterTest, ResetServiceRestartsAtTheGivenPose) {
+  std::int64_t t = feed(g_next_t, 3);
+  ebslam_msgs::ResetPose reset;
+  reset.request.use_pose = true;
+  reset.request.pose.x = 0.6;
+  reset.request.pose.y = 0.7;
+  reset.request.pose.theta = -0.4;
+  ASSERT_TRUE(ros::service::call("reset", reset));
+  EXPECT_TRUE(reset.response.success) << reset.response.message;
+  // A single event moves the particles only by the per-event diffusion.
+  ebslam_msgs::EventArray one = makeEvents(t, 1);
+  ASSERT_TRUE(publishAndAwait(one));
+  expectNear(poses_.back().pose.pose, 0.6, 0.7, -0.4, 0.01);
+  reset.request.use_pose = false;
+  reset.request.pose.x = std::nan("");
+  ASSERT_TRUE(ros::service::call("reset", reset));
+  EXPECT_TRUE(reset.response.success);
+  t = feed(t + 10000, 2);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+  reset.request.use_pose = true;
+  ASSERT_TRUE(ros::service::call("reset", reset));
+  EXPECT_FALSE(reset.response.success);  // a NaN pose is refused
+}
+
+// Bad input: each message is dropped or repaired, the node keeps publishing correct poses.
+TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
+  std::int64_t t = feed(g_next_t, 5);
+  const std::size_t before = poses_.size();
+  // Empty array: no pose.
+  ebslam_msgs::EventArray empty = makeEvents(t, 0);
+  empty.header.stamp = ebslam_ros::fromMicroseconds(t);
+  events_pub_.publish(empty);
+  // Events outside width x height only: nothing to process, no pose.
+  ebslam_msgs::EventArray outside = makeEvents(t, 100);
+  for (auto& e : outside.events) e.x = 300;
+  events_pub_.publish(outside);
+  // Sensor size changes mid-stream: the message is dropped.
+  events_pub_.publish(makeEvents(t, 100, 20, 240));
+  ros::WallDuration(0.3).sleep();
+  ros::spinOnce();
+  EXPECT_EQ(poses_.size(), before);
+  // Mixed: some events outside, the rest processed.
+  ebslam_msgs::EventArray mixed = makeEvents(t, 2000, 5);
+  for (std::size_t i = 0; i < mixed.events.size(); i += 10) mixed.events[i].y = 128;
+  ASSERT_TRUE(publishAndAwait(mixed));
+  t += 10000;
+  t = feed(t, 2);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+
+  // A 5 s gap: poses continue with the new stamps.
+  t += 5000000;
+  t = feed(t, 2);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+
+  // Time runs back by 20 s (a looping bag): the filter restarts, stamps follow the events.
+  const std::int64_t back = t - 20000000;
+  ASSERT_TRUE(publishAndAwait(makeEvents(back, 2000, 5)));
+  EXPECT_EQ(ebslam_ros::toMicroseconds(poses_.back().header.stamp), back + 1999 * 5);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+  t = feed(back + 10000, 2);
+
+  // Small backwards jitter inside a message is clamped, not a restart.
+  ebslam_msgs::EventArray jitter = makeEvents(t, 2000, 5);
+  std::swap(jitter.events[10].ts, jitter.events[11].ts);
+  ASSERT_TRUE(publishAndAwait(jitter));
+  t += 10000;
+
+  // 10 million events in one message (about 100 s of a fast eDVS): processed in pieces, the
+  // last pose carries the last event's stamp, and the node goes on.
+  ebslam_msgs::EventArray huge = makeEvents(t, 10000000, 1);
+  ASSERT_TRUE(publishAndAwait(huge, 60.0));
+  t += 10000000 + 10000;
+  t = feed(t, 2);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+
+  // Diagnostics name the bad input.
+  diagnostic_msgs::DiagnosticArray diagnostics;
+  auto diag_sub = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10,
+      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics = *m; });
+  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  std::map<std::string, std::string> values;
+  for (const auto& kv : diagnostics.status[0].values) values[kv.key] = kv.value;
+  EXPECT_EQ(values["messages of a wrong sensor size"], "1");
+  EXPECT_EQ(values["restarts after time jumps"], "1");
+  EXPECT_EQ(values["events outside the sensor"], std::to_string(100 + 200));
+  EXPECT_EQ(values["events clamped in time"], "1");
+  EXPECT_EQ(values["pauses longer than gap_warning"], "1");
+}
+
+TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
+  bool slam = false;
+  ros::param::get("~slam", slam);
+  if (!slam) GTEST_SKIP() << "EventParticleFilter has no map outputs";
+  ros::NodeHandle nh;
+  // Feed events through the fixture's helper.
+  struct Feeder : PoseFilterTest {
+    void TestBody() override {}
+  } feeder;
+  feeder.SetUp();
+  std::vector<sensor_msgs::Image> images;
+  auto image_sub = nh.subscribe<sensor_msgs::Image>(
+      "map/image", 2, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
+  PoseFilterTest::waitFor([&] { return image_sub.getNumPublishers() > 0; }, 5.0);
+  ros::WallDuration(0.3).sleep();
+  std::int64_t t = g_next_t;
+  for (int k = 0; k < 15; ++k) {
+    t = feeder.feed(t, 1);
+    ros::WallDuration(0.02).sleep();
+  }
+  nav_msgs::OccupancyGrid grid;
+  auto map_sub = nh.subscribe<nav_msgs::OccupancyGrid>(
+      "map", 1, [&](const nav_msgs::OccupancyGrid::ConstPtr& m) { grid = *m; });
+  ASSERT_TRUE(PoseFilterTest::waitFor([&] { return !grid.data.empty(); }, 5.0));  // latched
+  EXPECT_EQ(grid.header.frame_id, "map");
+  EXPECT_EQ(grid.data.size(), static_cast<std::size_t>(grid.info.width) * grid.info.height);
+  EXPECT_NEAR(grid.info.resolution, 0.03, 1e-6);
+  // Lines seen from the start pose are occupied in the map frame; unseen cells unknown.
+  const auto cell = [&](double x, double y) {
+    const int c = static_cast<int>((x - grid.info.origin.position.x) / grid.info.resolution);
+    const int r = static_cast<int>((y - grid.info.origin.position.y) / grid.info.resolution);
+    return static_cast<int>(grid.data[static_cast<std::size_t>(r) * grid.info.width + c]);
+  };
+  int on_line = 0;
+  for (double y = -0.8; y < 0.4; y += 0.03) {
+    for (double x = 0.49; x < 0.62; x += 0.03) on_line = std::max(on_line, cell(x, y));
+  }
+  EXPECT_GE(on_line, 50);
+  EXPECT_EQ(cell(8.0, 8.0), -1);
+  EXPECT_LE(ebslam_ros::toMicroseconds(grid.header.stamp), t);
+  ASSERT_TRUE(PoseFilterTest::waitFor([&] { return !images.empty(); }, 5.0));
+  EXPECT_EQ(images.back().encoding, "mono8");
+  EXPECT_EQ(images.back().width, grid.info.width);
+  EXPECT_EQ(images.back().header.frame_id, "map");
+
+  ebslam_msgs::SaveMap save;
+  save.request.path_prefix = ::testing::TempDir() + "slam_map_" + std::to_string(::getpid());
+  ASSERT_TRUE(ros::service::call("save_map", save));
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  const ebslam_ros::CeilingEdgeMap saved =
+      ebslam_ros::loadCeilingMap(save.request.path_prefix + ".yaml");
+  EXPECT_EQ(saved.edges.cols, static_cast<int>(grid.info.width));
+  EXPECT_GT(cv::countNonZero(saved.edges), 100);
+  save.request.path_prefix = "/nonexistent_dir/map";
+  ASSERT_TRUE(ros::service::call("save_map", save));
+  EXPECT_FALSE(save.response.success);
+}
+
+// A map that does not exist or is not an image: the nodelet says why and does not start; the
+// manager process lives on.
+TEST(BadMap, NodeRefusesToStartAndLivesOn) {
+  bool bad_map = false;
+  ros::param::get("~bad_map", bad_map);
+  if (!bad_map) GTEST_SKIP() << "only in event_particle_filter_bad_map.test";
+  ros::NodeHandle nh;
+  ros::WallDuration(2.0).sleep();
+  ros::master::V_TopicInfo topics;
+  ASSERT_TRUE(ros::master::getTopics(topics));
+  for (const auto& topic : topics) {
+    EXPECT_NE(topic.name, "/missing/pose");
+    EXPECT_NE(topic.name, "/bad_format/pose");
+  }
+  EXPECT_TRUE(ros::service::exists("/bad_map_manager/list", false));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "pose_filter_rostest");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
