@@ -94,6 +94,15 @@ struct EventSlam2dNodeConfig {
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
 
+/// Event image renderer (EventRenderer).
+struct EventRendererConfig {
+  double publish_rate_hz = 30.0;         ///< ~publish_rate: images per second of wall time [Hz]
+  double accumulation_time_s = 0.033;    ///< ~accumulation_time: events of this much event time [s]
+  std::array<int, 3> on_rgb{0, 0, 255};  ///< ~on_colour [r, g, b] 0..255 (rpg_dvs_ros: blue)
+  std::array<int, 3> off_rgb{255, 0, 0};  ///< ~off_colour [r, g, b] 0..255 (red)
+};
+EventRendererConfig loadEventRendererConfig(const ros::NodeHandle& private_nh);
+
 /// The floor-robot event simulator (thesis 6.5.3, as ebslam_simulate_events).
 struct EventSimulatorNodeConfig {
   /// ~trajectory: TUM file; default: the demo's excerpt of freiburg2_pioneer_360 in the

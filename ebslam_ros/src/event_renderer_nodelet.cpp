@@ -1,0 +1,139 @@
+// Event image for rviz and image_view (the role of rpg_dvs_ros' dvs_renderer).
+// Subscribes `events` (ebslam_msgs/EventArray) and, optionally, `image` (sensor_msgs/Image mono8,
+// bgr8 or rgb8 of the same size: the picture drawn under the events). Publishes `event_image`
+// (sensor_msgs/Image bgr8, width x height of the events) every 1 / ~publish_rate s of wall time
+// while subscribed: the events of the last ~accumulation_time seconds of event time, ON in
+// ~on_colour and OFF in ~off_colour ([r, g, b]) over black or the newest `image`; stamp = the
+// newest event's ts, frame = the events' frame. Nothing is published before the first event.
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <ebslam_msgs/EventArray.h>
+
+#include <array>
+#include <deque>
+#include <mutex>
+#include <pluginlib/class_list_macros.hpp>
+#include <stdexcept>
+
+#include "ebslam_ros/ros_params.h"
+
+namespace ebslam_ros {
+
+class EventRendererNodelet : public nodelet::Nodelet {
+ private:
+  static constexpr double kWarnPeriodS = 5.0;
+
+  void onInit() override {
+    try {
+      config_ = loadEventRendererConfig(getPrivateNodeHandle());
+    } catch (const std::exception& error) {
+      NODELET_ERROR("event renderer not started: %s", error.what());
+      return;
+    }
+    ros::NodeHandle& nh = getNodeHandle();
+    image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);
+    events_sub_ = nh.subscribe("events", 100, &EventRendererNodelet::onEvents, this);
+    image_sub_ = nh.subscribe("image", 1, &EventRendererNodelet::onImage, this);
+    timer_ = nh.createWallTimer(ros::WallDuration(1.0 / config_.publish_rate_hz),
+                                &EventRendererNodelet::render, this);
+  }
+
+  void onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (msg->events.empty()) return;
+    if (msg->width == 0 || msg->height == 0 || msg->width > 65535 || msg->height > 65535) {
+      NODELET_ERROR_THROTTLE(kWarnPeriodS, "EventArray of a %ux%u sensor ignored", msg->width,
+                             msg->height);
+      return;
+    }
+    if (msg->width != width_ || msg->height != height_) {
+      if (width_ != 0) {
+        NODELET_WARN_THROTTLE(kWarnPeriodS, "sensor size changed from %ux%u to %ux%u", width_,
+                              height_, msg->width, msg->height);
+      }
+      width_ = msg->width;
+      height_ = msg->height;
+      events_.clear();
+    }
+    frame_id_ = msg->header.frame_id;
+    const ros::Time newest = msg->events.back().ts;
+    if (!events_.empty() && newest < events_.back().ts) events_.clear();  // time jumped back
+    for (const ebslam_msgs::Event& e : msg->events) events_.push_back(e);
+    const ros::Time oldest = newest - ros::Duration(config_.accumulation_time_s);
+    while (!events_.empty() && events_.front().ts < oldest) events_.pop_front();
+  }
+
+  void onImage(const sensor_msgs::Image::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    background_ = msg;
+  }
+
+  void render(const ros::WallTimerEvent&) {
+    if (image_pub_.getNumSubscribers() == 0) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (width_ == 0 || events_.empty()) return;
+    sensor_msgs::Image image;
+    image.header.stamp = events_.back().ts;
+    image.header.frame_id = frame_id_;
+    image.width = width_;
+    image.height = height_;
+    image.encoding = sensor_msgs::image_encodings::BGR8;
+    image.step = 3 * width_;
+    image.data.assign(static_cast<std::size_t>(image.step) * height_, 0);
+    if (background_) drawBackground(*background_, image);
+    for (const ebslam_msgs::Event& e : events_) {
+      if (e.x >= width_ || e.y >= height_) continue;
+      const std::array<int, 3>& rgb = e.polarity ? config_.on_rgb : config_.off_rgb;
+      std::uint8_t* p = &image.data[static_cast<std::size_t>(e.y) * image.step + 3 * e.x];
+      p[0] = static_cast<std::uint8_t>(rgb[2]);
+      p[1] = static_cast<std::uint8_t>(rgb[1]);
+      p[2] = static_cast<std::uint8_t>(rgb[0]);
+    }
+    image_pub_.publish(image);
+  }
+
+  void drawBackground(const sensor_msgs::Image& in, sensor_msgs::Image& out) {
+    namespace enc = sensor_msgs::image_encodings;
+    const bool mono = in.encoding == enc::MONO8;
+    const bool bgr = in.encoding == enc::BGR8;
+    const bool rgb = in.encoding == enc::RGB8;
+    if (in.width != out.width || in.height != out.height || !(mono || bgr || rgb) ||
+        in.step < in.width * (mono ? 1u : 3u) ||
+        in.data.size() < static_cast<std::size_t>(in.step) * in.height) {
+      NODELET_WARN_THROTTLE(kWarnPeriodS,
+                            "`image` (%ux%u %s) not drawn: needs mono8/bgr8/rgb8 of %ux%u",
+                            in.width, in.height, in.encoding.c_str(), out.width, out.height);
+      return;
+    }
+    for (std::uint32_t r = 0; r < in.height; ++r) {
+      const std::uint8_t* src = &in.data[static_cast<std::size_t>(r) * in.step];
+      std::uint8_t* dst = &out.data[static_cast<std::size_t>(r) * out.step];
+      for (std::uint32_t c = 0; c < in.width; ++c) {
+        if (mono) {
+          dst[3 * c] = dst[3 * c + 1] = dst[3 * c + 2] = src[c];
+        } else {
+          dst[3 * c] = src[3 * c + (rgb ? 2 : 0)];
+          dst[3 * c + 1] = src[3 * c + 1];
+          dst[3 * c + 2] = src[3 * c + (rgb ? 0 : 2)];
+        }
+      }
+    }
+  }
+
+  EventRendererConfig config_;
+  std::mutex mutex_;
+  std::deque<ebslam_msgs::Event> events_;
+  std::uint32_t width_ = 0, height_ = 0;
+  std::string frame_id_;
+  sensor_msgs::Image::ConstPtr background_;
+  ros::Subscriber events_sub_, image_sub_;
+  ros::Publisher image_pub_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace ebslam_ros
+
+PLUGINLIB_EXPORT_CLASS(ebslam_ros::EventRendererNodelet, nodelet::Nodelet)

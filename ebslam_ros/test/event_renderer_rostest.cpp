@@ -1,0 +1,96 @@
+// rostest of the EventRenderer nodelet (event_renderer.test): colours, window, frame, stamp and a
+// background image; a wrong-size background is not drawn.
+#include <ebslam_msgs/EventArray.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Image.h>
+
+#include <vector>
+
+namespace {
+
+template <typename Predicate>
+bool waitFor(Predicate done, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (!done() && ros::WallTime::now() < end) {
+    ros::spinOnce();
+    ros::WallDuration(0.005).sleep();
+  }
+  return done();
+}
+
+ebslam_msgs::Event event(const ros::Time& t, int x, int y, bool on) {
+  ebslam_msgs::Event e;
+  e.ts = t;
+  e.x = static_cast<std::uint16_t>(x);
+  e.y = static_cast<std::uint16_t>(y);
+  e.polarity = on;
+  return e;
+}
+
+const std::uint8_t* pixel(const sensor_msgs::Image& image, int x, int y) {
+  return &image.data[static_cast<std::size_t>(y) * image.step + 3 * x];
+}
+
+TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
+  ros::NodeHandle nh;
+  ros::Publisher events = nh.advertise<ebslam_msgs::EventArray>("events", 10);
+  ros::Publisher background = nh.advertise<sensor_msgs::Image>("image", 1, true);
+  std::vector<sensor_msgs::Image> images;
+  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>(
+      "event_image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
+  ASSERT_TRUE(
+      waitFor([&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
+  ros::WallDuration(0.3).sleep();
+  ebslam_msgs::EventArray msg;
+  msg.header.frame_id = "edvs_optical_frame";
+  msg.width = 128;
+  msg.height = 64;
+  const ros::Time t0(100.0);
+  msg.events = {event(t0, 1, 2, true), event(t0 + ros::Duration(0.1), 3, 4, true),
+                event(t0 + ros::Duration(0.12), 5, 6, false)};
+  msg.header.stamp = msg.events.back().ts;
+  events.publish(msg);
+  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  const sensor_msgs::Image& image = images.back();
+  EXPECT_EQ(image.encoding, "bgr8");
+  EXPECT_EQ(image.width, 128u);
+  EXPECT_EQ(image.height, 64u);
+  EXPECT_EQ(image.header.frame_id, "edvs_optical_frame");
+  EXPECT_EQ(image.header.stamp, msg.events.back().ts);
+  EXPECT_EQ(pixel(image, 1, 2)[0], 0);    // older than the 0.05 s window: gone
+  EXPECT_EQ(pixel(image, 3, 4)[0], 255);  // ON: blue (bgr)
+  EXPECT_EQ(pixel(image, 5, 6)[2], 255);  // OFF: red
+  EXPECT_EQ(pixel(image, 5, 6)[0], 0);
+
+  // A grey background of the right size is drawn under the events; one of another size is not.
+  sensor_msgs::Image grey;
+  grey.width = 128;
+  grey.height = 64;
+  grey.encoding = "mono8";
+  grey.step = 128;
+  grey.data.assign(128 * 64, 77);
+  background.publish(grey);
+  ros::WallDuration(0.3).sleep();
+  images.clear();
+  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  EXPECT_EQ(pixel(images.back(), 10, 10)[1], 77);
+  EXPECT_EQ(pixel(images.back(), 3, 4)[0], 255);
+  grey.width = 20;
+  grey.step = 20;
+  grey.data.assign(20 * 64, 77);
+  background.publish(grey);
+  ros::WallDuration(0.3).sleep();
+  images.clear();
+  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  EXPECT_EQ(pixel(images.back(), 10, 10)[1], 0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "event_renderer_rostest");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
