@@ -64,8 +64,14 @@ int main(int argc, char** argv) {
       }
     }
   }
-  std::printf("%s core CPU per frame: %.2f ms (DASP alone %.2f ms) over %d frames (%zu)\n",
-              tdasp ? "t-DASP" : "DASP + edges + s-DASP", total / count, dasp_ms / count, count,
-              checksum);
+  if (tdasp) {
+    std::printf("t-DASP core CPU per frame: %.2f ms over %d frames (%zu)\n", total / count, count,
+                checksum);
+  } else {
+    std::printf(
+        "DASP + edges + s-DASP core CPU per frame: %.2f ms (DASP alone %.2f ms) over %d "
+        "frames (%zu)\n",
+        total / count, dasp_ms / count, count, checksum);
+  }
   return 0;
 }

@@ -13,7 +13,7 @@ import threading
 import time
 import xmlrpc.client
 
-import rosnode
+import rosgraph
 import rospy
 from ebslam_msgs.msg import Segmentation
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2
@@ -21,8 +21,8 @@ from visualization_msgs.msg import MarkerArray
 
 
 def manager_pid(name="/camera/manager"):
-    api = rosnode.get_api_uri(rospy.get_master(), name)
-    code, _, pid = xmlrpc.client.ServerProxy(api).getPid("/throughput")
+    api = rosgraph.Master("/throughput").lookupNode(name)
+    _, _, pid = xmlrpc.client.ServerProxy(api).getPid("/throughput")
     return pid
 
 
