@@ -5,6 +5,7 @@
 #include <dasp/rgbd_io.h>
 #include <dasp/segmentation.h>
 #include <dasp/superpixel_graph.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
 #include <gtest/gtest.h>
@@ -440,6 +441,39 @@ TEST_F(SegmentationNodes, SdaspReportsLabelsThatDoNotMatchTheirSuperpixelArray) 
   std::lock_guard<std::mutex> lock(out_.mutex);
   EXPECT_EQ(out_.injected_segmentations[23.0].segment_ids, out_.segmentations[20.0].segment_ids);
   EXPECT_EQ(out_.injected_segmentations.count(21.0) + out_.injected_segmentations.count(22.0), 0u);
+}
+
+// Runs last: it changes the nodes' parameters.
+TEST_F(SegmentationNodes, ZDynamicReconfigureChangesTheNextFrame) {
+  dynamic_reconfigure::Reconfigure dasp_request;
+  dynamic_reconfigure::IntParameter count;
+  count.name = "superpixel_count";
+  count.value = 300;
+  dasp_request.request.config.ints.push_back(count);
+  ASSERT_TRUE(ros::service::call("/camera/dasp/set_parameters", dasp_request));
+  dynamic_reconfigure::Reconfigure sdasp_request;
+  dynamic_reconfigure::DoubleParameter threshold;
+  threshold.name = "threshold";
+  threshold.value = 0.3;
+  sdasp_request.request.config.doubles.push_back(threshold);
+  ASSERT_TRUE(ros::service::call("/camera/sdasp/set_parameters", sdasp_request));
+
+  publishGood(30.0);
+  ASSERT_TRUE(waitFor(
+      [&] { return has(&Outputs::labels, 30.0) && has(&Outputs::segmentations, 30.0); }, 20.0));
+  dasp::DaspConfig config;
+  config.superpixel_count = 300;
+  const dasp::Superpixels expected = dasp::computeDasp(frame_, config);
+  dasp::SdaspConfig sdasp;
+  sdasp.threshold = 0.3f;
+  const std::vector<int> node_segments =
+      dasp::segmentGraph(dasp::ultrametricContourGraph(expected, sdasp), sdasp.threshold);
+  std::lock_guard<std::mutex> lock(out_.mutex);
+  EXPECT_EQ(cv::countNonZero(toLabelMat(out_.labels[30.0]) != expected.labels), 0);
+  EXPECT_EQ(out_.arrays[30.0].superpixels.size(), expected.superpixels.size());
+  EXPECT_FLOAT_EQ(out_.segmentations[30.0].threshold, 0.3f);
+  EXPECT_EQ(out_.segmentations[30.0].segment_ids,
+            std::vector<int32_t>(node_segments.begin(), node_segments.end()));
 }
 
 }  // namespace
