@@ -51,6 +51,10 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration, "simulated seconds per run")->capture_default_str();
   app.add_option("--seed", seed, "seed")->capture_default_str();
   app.add_option("--csv", csv_path, "also write the figures as CSV");
+  std::string fused_path;
+  app.add_option("--fused-out", fused_path,
+                 "write the first run's fused events of its second 50 ms after --t-begin + 1 s as "
+                 "text: t_us x y fused_depth_m true_depth_m X Y Z (eDVS frame)");
   CLI11_PARSE(app, argc, argv);
   try {
     std::ofstream csv;
@@ -66,6 +70,8 @@ int main(int argc, char** argv) {
         "(edge events) |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
     std::vector<std::string> band_rows;
+    std::ofstream fused_out;
+    if (!fused_path.empty()) fused_out.open(fused_path);
     const double bands[] = {0.5, 1.0, 1.5, 2.0, 3.0, 4.0};
     for (const std::string& path : trajectories) {
       ebslam::Trajectory trajectory = ebslam::readTumTrajectory(path);
@@ -98,6 +104,11 @@ int main(int argc, char** argv) {
         if (e.is_noise || !std::isfinite(e.depth_m)) continue;
         ++signal;
         const ebslam::FusedEvent f = fusion.fuse(e.event);
+        if (fused_out && t >= t_begin + 1.0 && t < t_begin + 1.05) {
+          fused_out << e.event.t_us << ' ' << e.event.x << ' ' << e.event.y << ' ' << f.depth_m
+                    << ' ' << e.depth_m << ' ' << f.point.x() << ' ' << f.point.y() << ' '
+                    << f.point.z() << '\n';
+        }
         if (!std::isfinite(f.depth_m)) continue;
         ++fused;
         const double error = std::abs(static_cast<double>(f.depth_m) - e.depth_m);
@@ -120,6 +131,7 @@ int main(int argc, char** argv) {
           }
         }
       }
+      if (fused_out) fused_out.close();  // first run only
       const std::string name = std::filesystem::path(path).stem().string();
       const double fused_share = signal ? static_cast<double>(fused) / signal : 0.0;
       const double wrong_share = fused ? static_cast<double>(wrong) / fused : 0.0;
