@@ -105,6 +105,7 @@ void ExplorationConfig::validate() const {
   if (max_path_cells < min_path_cells) fail("max_path_cells must be >= min_path_cells");
   if (!positive(waypoint_tolerance_m)) fail("waypoint_tolerance_m must be positive");
   if (!positive(turn_in_place_rad)) fail("turn_in_place_rad must be positive");
+  if (!(std::isfinite(lookahead_m) && lookahead_m >= 0.0)) fail("lookahead_m must be >= 0");
   if (!positive(heading_gain)) fail("heading_gain must be positive");
   if (!positive(max_speed_mps)) fail("max_speed_mps must be positive");
   if (!positive(max_turn_rate_rps)) fail("max_turn_rate_rps must be positive");
@@ -257,6 +258,25 @@ std::vector<int> ExplorationPlanner::plan(const Eigen::Vector2d& position) {
   const std::optional<int> start = grid_.cellAt(position);
   if (!start) return {};
   computeGain(*start);
+  if (config_.keep_clear_of_blocked) {
+    // Cells next to a blocked cell lie within about a robot radius of an obstacle: driving
+    // through them means touching it. Avoid them, unless that leaves no path at all.
+    avoid_ = blocked_;
+    for (int c = 0; c < grid_.size(); ++c) {
+      if (!blocked_[c]) continue;
+      for (int nb : grid_.neighbours(c)) {
+        if (nb >= 0) avoid_[nb] = 1;
+      }
+    }
+    std::vector<int> path = search(*start, avoid_);
+    if (!path.empty()) return path;
+  }
+  return search(*start, blocked_);
+}
+
+std::vector<int> ExplorationPlanner::search(int start_cell,
+                                            const std::vector<std::uint8_t>& closed_cells) {
+  const std::optional<int> start = start_cell;
   const auto t0 = std::chrono::steady_clock::now();
   struct Node {
     int cell;
@@ -305,7 +325,7 @@ std::vector<int> ExplorationPlanner::plan(const Eigen::Vector2d& position) {
     }
     if (node.length >= config_.max_path_cells) continue;
     for (int nb : grid_.neighbours(node.cell)) {
-      if (nb < 0 || closed[nb] || blocked_[nb]) continue;
+      if (nb < 0 || closed[nb] || closed_cells[nb]) continue;
       const double gain = node.gain + gain_[nb];
       nodes.push_back({nb, index, node.length + 1, gain});
       open.push({gain / (node.length + 1), static_cast<int>(nodes.size()) - 1});
@@ -366,6 +386,19 @@ void Explorer::replan(double now_s, const Eigen::Vector2d& position,
 
 VelocityCommand Explorer::follow(const Pose2& pose) {
   const Eigen::Vector2d position(pose.x, pose.y);
+  const auto distance = [&](std::size_t j) {
+    return (planner_.grid().centre(path_[j]) - position).norm();
+  };
+  // Progress along the path: skip to the nearest of the next few cells (steering at the
+  // look-ahead point passes cells without touching their centres).
+  if (next_waypoint_ < path_.size()) {
+    std::size_t nearest = next_waypoint_;
+    const std::size_t last = std::min(path_.size(), next_waypoint_ + 4);
+    for (std::size_t j = next_waypoint_ + 1; j < last; ++j) {
+      if (distance(j) < distance(nearest)) nearest = j;
+    }
+    next_waypoint_ = nearest;
+  }
   while (next_waypoint_ < path_.size() &&
          (planner_.grid().centre(path_[next_waypoint_]) - position).norm() <
              config_.waypoint_tolerance_m) {
@@ -375,7 +408,14 @@ VelocityCommand Explorer::follow(const Pose2& pose) {
     need_plan_ = true;
     return {};
   }
-  const Eigen::Vector2d to_target = planner_.grid().centre(path_[next_waypoint_]) - position;
+  // Pure pursuit over the cells: steer at the farthest upcoming cell within the look-ahead
+  // distance, so that the 60-degree zig-zags of a hex path become one smooth line.
+  std::size_t target = next_waypoint_;
+  for (std::size_t j = next_waypoint_ + 1; j < path_.size(); ++j) {
+    if ((planner_.grid().centre(path_[j]) - position).norm() > config_.lookahead_m) break;
+    target = j;
+  }
+  const Eigen::Vector2d to_target = planner_.grid().centre(path_[target]) - position;
   const double error = wrapAngle(std::atan2(to_target.y(), to_target.x()) - pose.theta);
   VelocityCommand command;
   command.omega_rps = std::clamp(config_.heading_gain * error, -config_.max_turn_rate_rps,

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   std::string output = "exploration_out";
   bool with_baseline = false;
   bool baseline_only = false;
+  double baseline_duration_s = 0.0;
   double divergence_m = 0.3;
   ExplorationRunConfig config;
   app.add_option("floor_plans", plans, "floor-plan files")->required()->check(CLI::ExistingFile);
@@ -46,9 +47,25 @@ int main(int argc, char** argv) {
   app.add_option("--cone-half-angle", config.exploration.bump_cone_half_angle_rad,
                  "bump cone half angle [rad]")
       ->capture_default_str();
+  app.add_option("--render-rate", config.simulator.events.render_rate_hz,
+                 "event simulator's minimum render rate [Hz]")
+      ->capture_default_str();
+  app.add_option("--max-step-px", config.simulator.events.max_step_motion_px,
+                 "event simulator's largest image motion per render step [px]")
+      ->capture_default_str();
+  app.add_option("--lookahead", config.exploration.lookahead_m, "pure-pursuit look-ahead [m]")
+      ->capture_default_str();
+  app.add_option("--keep-clear", config.exploration.keep_clear_of_blocked,
+                 "plan around cells next to blocked cells (1/0)")
+      ->capture_default_str();
+  app.add_option("--backout-time", config.exploration.backout_time_s, "back-out time [s]")
+      ->capture_default_str();
   app.add_option("--divergence", divergence_m, "position RMSE counted as divergence [m]")
       ->capture_default_str();
   app.add_flag("--baseline", with_baseline, "also run the random bump-and-turn baseline");
+  app.add_option("--baseline-duration", baseline_duration_s,
+                 "simulated time of the baseline runs [s] (default: --duration); the baseline "
+                 "simulates no events, so it can run long enough to reach 90 %");
   app.add_flag("--baseline-only", baseline_only, "run only the baseline");
   CLI11_PARSE(app, argc, argv);
 
@@ -75,6 +92,7 @@ int main(int argc, char** argv) {
           ExplorationRunConfig run = config;
           run.seed = static_cast<std::uint64_t>(seed);
           run.random_baseline = baseline;
+          if (baseline && baseline_duration_s > 0.0) run.duration_s = baseline_duration_s;
           const std::string method = baseline ? "random" : "gain";
           const std::string stem =
               (fs::path(output) / (layout + "_" + method + "_s" + std::to_string(seed))).string();

@@ -69,8 +69,12 @@ struct ExplorationConfig {
   double robot_radius_m = 0.15;
   /// After a bump, cells in a cone around the contact direction are blocked: centres within
   /// robot_radius_m + bump_cone_depth_m of the robot and within the half angle.
-  double bump_cone_depth_m = 0.2;
-  double bump_cone_half_angle_rad = 0.5;
+  /// A wide cone (60 degrees each side): a cell beside the contact whose centre lies closer to
+  /// a straight wall than the robot radius cannot hold the robot's centre anyway, and sealing
+  /// the room boundary then costs fewer bumps (chosen on tuning seed 101, not the evaluation
+  /// seeds).
+  double bump_cone_depth_m = 0.3;
+  double bump_cone_half_angle_rad = 1.05;
   /// Gain (eq. 7.9, 7.10): weights and slope; the thesis' values.
   double weight_z = 1.0;
   double weight_e = 1.0;
@@ -78,6 +82,9 @@ struct ExplorationConfig {
   /// Best-first search budget: expanded cells and CPU time [s].
   int planner_max_nodes = 3000;
   double planner_time_budget_s = 0.005;
+  /// Plan around the cells next to blocked cells (within about a robot radius of an obstacle)
+  /// when a path exists that way.
+  bool keep_clear_of_blocked = true;
   /// Paths shorter than this many cells are taken only if no longer one is found.
   int min_path_cells = 3;
   /// Longest path handed to the controller [cells] (replanned when done).
@@ -85,7 +92,11 @@ struct ExplorationConfig {
   /// Controller: waypoint reached within this distance [m]; turn in place while the heading
   /// error exceeds turn_in_place_rad; omega = heading_gain * error.
   double waypoint_tolerance_m = 0.06;
-  double turn_in_place_rad = 0.6;
+  /// Pure-pursuit look-ahead: the robot steers at the farthest upcoming path cell within this
+  /// distance [m] (0: cell by cell). On tuning seed 101 (office, 200 s, keeping clear of
+  /// blocked cells) 0.2 m covered 50 % against 44 % cell by cell.
+  double lookahead_m = 0.2;
+  double turn_in_place_rad = 0.8;
   double heading_gain = 2.5;
   double max_speed_mps = 0.3;
   double max_turn_rate_rps = 1.5;
@@ -141,8 +152,11 @@ class ExplorationPlanner {
   bool lastPlanHitTimeBudget() const { return last_hit_time_; }
 
  private:
+  std::vector<int> search(int start_cell, const std::vector<std::uint8_t>& closed_cells);
+
   ExplorationConfig config_;
   HexGrid grid_;
+  std::vector<std::uint8_t> avoid_;  // scratch: blocked cells and their neighbours
   std::vector<float> z_, e_, gain_;
   std::vector<std::uint8_t> blocked_;
   std::vector<Eigen::Vector2d> bump_points_;
