@@ -7,14 +7,23 @@
 //   depth_registered/camera_info  sensor_msgs/CameraInfo (identical: the depth is registered)
 // (the rgbd_launch / openni2_launch names, which dasp_ros/Dasp and Tdasp subscribe to)
 // All four carry the same stamp (wall clock at publication) and ~frame_id.
+// A source that cannot start (~folder unset, missing or without frames, a bad parameter) logs
+// FATAL with the reason and does not load (a node exits). A frame that cannot be published (an
+// unreadable or mismatched file, a size whose aspect ratio differs from the calibration's) is
+// skipped, and named in an error the first time (also when looping, at any rate). Frames of
+// another size with the calibration's aspect ratio get scaled intrinsics (a warning per size).
 #include <dasp/rgbd_io.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
+#include <set>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "dasp_ros/conversions.h"
@@ -29,15 +38,14 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     try {
       config_ = loadRgbdFolderSourceConfig(getPrivateNodeHandle());
       frames_ = dasp::listRgbdFolder(config_.folder);
+      if (frames_.empty()) {
+        throw std::invalid_argument("no <name>_rgb.png with <name>_depth_mm.png in ~folder '" +
+                                    config_.folder + "'");
+      }
     } catch (const std::exception& error) {
-      NODELET_ERROR("RGB-D folder source not started: %s", error.what());
-      return;
-    }
-    if (frames_.empty()) {
-      NODELET_ERROR(
-          "RGB-D folder source not started: no <name>_rgb.png with <name>_depth_mm.png in '%s'",
-          config_.folder.c_str());
-      return;
+      // As the eDVS driver: the nodelet does not load (a node exits), the reason names the cause.
+      NODELET_FATAL("RGB-D folder source not started: %s", error.what());
+      throw;
     }
     color_pub_ = nh.advertise<sensor_msgs::Image>("rgb/image_rect_color", 2);
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 2);
@@ -67,9 +75,28 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     try {
       frame = dasp::loadRgbdFrame(paths, config_.intrinsics);
     } catch (const std::exception& error) {
-      ++failed_;
-      NODELET_ERROR_THROTTLE(1.0, "skipping frame %s: %s", paths.name.c_str(), error.what());
+      skip(paths, error.what());
       return;
+    }
+    const std::optional<dasp::Intrinsics> intrinsics =
+        config_.intrinsicsFor(frame.color.cols, frame.color.rows);
+    if (!intrinsics) {
+      skip(paths, std::to_string(frame.color.cols) + "x" + std::to_string(frame.color.rows) +
+                      " pixels, another aspect ratio than the " +
+                      std::to_string(config_.calibration_width) + "x" +
+                      std::to_string(config_.calibration_height) +
+                      " of ~fx..~cy (~calibration_width, ~calibration_height)");
+      return;
+    }
+    frame.intrinsics = *intrinsics;
+    if (frame.color.cols != config_.calibration_width &&
+        scaled_sizes_.insert({frame.color.cols, frame.color.rows}).second) {
+      NODELET_WARN(
+          "frames of %dx%d pixels in '%s': the intrinsics of the %dx%d calibration scaled to fx "
+          "%.2f fy %.2f cx %.2f cy %.2f",
+          frame.color.cols, frame.color.rows, config_.folder.c_str(), config_.calibration_width,
+          config_.calibration_height, intrinsics->fx, intrinsics->fy, intrinsics->cx,
+          intrinsics->cy);
     }
     std_msgs::Header header;
     header.stamp = ros::Time::now();
@@ -81,6 +108,16 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     depth_info_pub_.publish(info);
     color_pub_.publish(toColorImageMsg(frame.color, header));
     depth_pub_.publish(toDepthImageMsg(frame.depth, header));
+  }
+
+  // A frame that cannot be published: named with its reason the first time (a throttle would
+  // hide the reasons of other frames at low rates), counted every time.
+  void skip(const dasp::RgbdFramePaths& paths, const std::string& reason) {
+    ++failed_;
+    if (reported_.insert(paths.name).second) {
+      NODELET_ERROR("skipping frame %s of '%s': %s", paths.name.c_str(), config_.folder.c_str(),
+                    reason.c_str());
+    }
   }
 
   // roscpp counts a subscriber before its side of the connection is ready, and messages sent in
@@ -101,6 +138,8 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
   std::size_t next_ = 0;
   std::size_t published_ = 0;
   std::size_t failed_ = 0;
+  std::set<std::string> reported_;              // frames whose skip was logged
+  std::set<std::pair<int, int>> scaled_sizes_;  // frame sizes whose scaling was logged
   ros::Publisher color_pub_, depth_pub_, color_info_pub_, depth_info_pub_;
   ros::WallTimer timer_;
 };

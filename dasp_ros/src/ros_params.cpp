@@ -34,6 +34,8 @@ RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& nh) {
   config.intrinsics.fy = static_cast<float>(param<double>(nh, "fy", config.intrinsics.fy));
   config.intrinsics.cx = static_cast<float>(param<double>(nh, "cx", config.intrinsics.cx));
   config.intrinsics.cy = static_cast<float>(param<double>(nh, "cy", config.intrinsics.cy));
+  config.calibration_width = param<int>(nh, "calibration_width", config.calibration_width);
+  config.calibration_height = param<int>(nh, "calibration_height", config.calibration_height);
 
   if (config.folder.empty()) {
     throw std::invalid_argument("parameter " + nh.resolveName("folder") + " is not set");
@@ -47,7 +49,28 @@ RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& nh) {
   if (!std::isfinite(config.intrinsics.cx) || !std::isfinite(config.intrinsics.cy)) {
     throw std::invalid_argument("parameters cx, cy must be finite");
   }
+  if (config.calibration_width <= 0 || config.calibration_height <= 0) {
+    throw std::invalid_argument("parameters " + nh.resolveName("calibration_width") + ", " +
+                                nh.resolveName("calibration_height") + " must be positive");
+  }
   return config;
+}
+
+std::optional<dasp::Intrinsics> RgbdFolderSourceConfig::intrinsicsFor(int width, int height) const {
+  if (width == calibration_width && height == calibration_height) return intrinsics;
+  // Same aspect ratio: width / calibration_width == height / calibration_height, exactly.
+  if (static_cast<long>(width) * calibration_height !=
+      static_cast<long>(height) * calibration_width) {
+    return std::nullopt;
+  }
+  const float scale = static_cast<float>(width) / static_cast<float>(calibration_width);
+  dasp::Intrinsics scaled;
+  scaled.fx = intrinsics.fx * scale;
+  scaled.fy = intrinsics.fy * scale;
+  // Pixel centres: pixel i covers [i, i + 1) of the image, so centres scale about -0.5.
+  scaled.cx = (intrinsics.cx + 0.5f) * scale - 0.5f;
+  scaled.cy = (intrinsics.cy + 0.5f) * scale - 0.5f;
+  return scaled;
 }
 
 }  // namespace dasp_ros

@@ -18,8 +18,10 @@ bin="${WS_DIR:-${repo}/.ws}/build/ebslam"
 mkdir -p "${out}"
 cd "${out}"
 
-"${bin}/ebslam_simulate_events" --trajectory "${trajectory}" --seed "${seed}" --events events.ebe \
-  --groundtruth groundtruth.tum --map ceiling >simulate.log
+if [ ! -f events.ebe ]; then
+  "${bin}/ebslam_simulate_events" --trajectory "${trajectory}" --seed "${seed}" --events events.ebe \
+    --groundtruth groundtruth.tum --map ceiling >simulate.log
+fi
 grep '^events:' simulate.log
 ox=$(sed -n 's/^origin_x_m: *//p' ceiling.yaml)
 oy=$(sed -n 's/^origin_y_m: *//p' ceiling.yaml)
@@ -35,7 +37,7 @@ for line in open('groundtruth.tum'):
 
 port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI=http://localhost:${port}
-for filter in slam ebpf; do
+for filter in ${FILTERS:-slam ebpf}; do
   rm -f "${filter}.bag"
   roslaunch -p "${port}" ebslam_ros simulated_localisation.launch filter:="${filter}" speed:="${speed}" \
     seed:="${seed}" trajectory:="${trajectory}" initial_pose:="${start}" map:="${out}/ceiling.yaml" \
@@ -53,7 +55,7 @@ for filter in slam ebpf; do
   rosrun ebslam_ros bag_to_tum "${filter}.bag" /pose "${filter}_ros.tum"
   rosrun ebslam_ros bag_to_tum "${filter}.bag" /ground_truth/pose "${filter}_ros_groundtruth.tum"
 done
-for filter in slam ebpf; do
+for filter in ${FILTERS:-slam ebpf}; do
   echo "== ${filter} offline:"
   "${bin}/ebslam_evaluate_trajectory" --no-time-offset "${filter}_offline.tum" groundtruth.tum | grep RMSE
   echo "== ${filter} through ROS (${speed}x, /clock):"

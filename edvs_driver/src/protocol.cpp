@@ -388,7 +388,7 @@ std::int64_t EventParser::tolerance() const {
 }
 
 EventParser::Link EventParser::linkFromLast(std::size_t pos) const {
-  const FrameRef f = frameAt(pos);
+  const FrameRef& f = frames_[pos];
   Link l = link(last_, f);
   // The device clock never runs ahead of the host clock: an event's time is at most the host
   // time of its read minus the smallest latency seen so far (plus lead_tolerance_us). This
@@ -445,9 +445,14 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
   chain_advance_.assign(n, 0);
   chain_end_host_.assign(n, kNoHost);
   const auto frame_score = static_cast<std::int64_t>(frame);
+  // Each complete frame decoded once.
+  frames_.resize(n);
+  for (std::size_t p = 0; p + frame <= n; ++p) {
+    if (frameValid(p)) frames_[p] = frameAt(p);
+  }
   for (std::size_t p = n - frame + 1; p-- > 0;) {
     if (!frameValid(p)) continue;
-    const FrameRef a = frameAt(p);
+    const FrameRef& a = frames_[p];
     // Score of a chain: bytes its frames explain minus bytes it skips. True events lie back
     // to back, so their chain skips only the garbage; a chain of frames that garbage or a
     // misalignment made up has to skip bytes at nearly every step.
@@ -462,7 +467,7 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
       const std::int64_t score =
           frame_score + chain_score_[q] - static_cast<std::int64_t>(q - p - frame);
       if (score <= best_score) continue;
-      const Link l = link(a, frameAt(q));
+      const Link l = link(a, frames_[q]);
       if (!l.ok) continue;
       const std::int64_t advance = l.step_us + chain_advance_[q];
       if (a.host_us != kNoHost && chain_end_host_[q] != kNoHost &&

@@ -8,6 +8,7 @@
 #include <dasp/tdasp.h>
 #include <ros/node_handle.h>
 
+#include <optional>
 #include <string>
 
 namespace dasp_ros {
@@ -22,7 +23,14 @@ struct RgbdFolderSourceConfig {
   bool wait_for_subscribers = false;
   std::string frame_id =
       "camera_rgb_optical_frame";  ///< ~frame_id: optical frame of colour and registered depth
-  dasp::Intrinsics intrinsics;     ///< ~fx, ~fy, ~cx, ~cy [px]
+  dasp::Intrinsics intrinsics;     ///< ~fx, ~fy, ~cx, ~cy [px], for the calibration size
+  int calibration_width = 640;     ///< ~calibration_width: image width of ~fx..~cy [px]
+  int calibration_height = 480;    ///< ~calibration_height: image height of ~fx..~cy [px]
+
+  /// The intrinsics for frames of width x height pixels: those of the calibration size, scaled
+  /// when the frame has the same aspect ratio (a 320x240 frame of a 640x480 calibration: focal
+  /// lengths halved, principal point (c + 0.5) / 2 - 0.5), nullopt for another aspect ratio.
+  std::optional<dasp::Intrinsics> intrinsicsFor(int width, int height) const;
 };
 
 RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& private_nh);

@@ -309,7 +309,7 @@ class EventParser {
   bool frameValid(std::size_t pos) const;
   FrameRef frameAt(std::size_t pos) const;
   Link link(const FrameRef& a, const FrameRef& b) const;
-  Link linkFromLast(std::size_t pos) const;
+  Link linkFromLast(std::size_t pos) const;  // pos: a valid frame decoded into frames_
   std::int64_t tolerance() const;
   void publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
                     ebslam::EventVector& out);
@@ -318,6 +318,7 @@ class EventParser {
   std::vector<std::uint8_t> held_;         // bytes after the last published event
   std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
   std::vector<std::uint32_t> held_idle_;   // idle epoch at the arrival of each held byte
+  std::vector<FrameRef> frames_;           // per held position: the frame starting there (if valid)
   std::vector<int> chain_length_;          // per held position: frames in its best chain
   std::vector<std::int64_t> chain_score_;  // per held position: bytes explained minus skipped
   std::vector<char> chain_open_;           // per held position: the chain may grow with more bytes

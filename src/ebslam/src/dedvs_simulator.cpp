@@ -798,8 +798,23 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
       annotated.event = event;
       annotated.is_noise = noise_flags[e] != 0;
       annotated.depth_m = std::isinf(depth) ? std::numeric_limits<float>::quiet_NaN() : depth;
-      annotated.at_depth_edge =
-          atDepthEdge(use_first ? hits_previous.z : hits_current.z, width, height, i, 0.1f);
+      const std::vector<float>& z_at = use_first ? hits_previous.z : hits_current.z;
+      annotated.at_depth_edge = atDepthEdge(z_at, width, height, i, 0.1f);
+      float z_min = std::numeric_limits<float>::infinity();
+      float z_max = -std::numeric_limits<float>::infinity();
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = event.x + dx, ny = event.y + dy;
+          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+          const float zn = z_at[static_cast<std::size_t>(ny) * width + nx];
+          if (std::isinf(zn)) continue;
+          z_min = std::min(z_min, zn);
+          z_max = std::max(z_max, zn);
+        }
+      }
+      const bool any = z_min <= z_max;
+      annotated.neighbourhood_min_depth_m = any ? z_min : std::numeric_limits<float>::quiet_NaN();
+      annotated.neighbourhood_max_depth_m = any ? z_max : std::numeric_limits<float>::quiet_NaN();
       batch.push_back(annotated);
     }
     if (event_sink && !batch.empty()) event_sink(batch);

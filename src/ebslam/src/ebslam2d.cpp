@@ -21,6 +21,16 @@ void Ebslam2dConfig::validate() const {
   if (!positive(splat_sigma_wtrig)) fail("splat_sigma_wtrig must be positive");
   if (!positive(normalisation_step_px)) fail("normalisation_step_px must be positive");
   if (!positive(normalisation_prior_px)) fail("normalisation_prior_px must be positive");
+  if (!positive(rate_window_s)) fail("rate_window_s must be positive");
+  if (!(noise_floor_gain_down > 0.0 && noise_floor_gain_down <= 1.0)) {
+    fail("noise_floor_gain_down must be in (0, 1]");
+  }
+  if (!(noise_floor_gain_up >= 0.0 && noise_floor_gain_up <= 1.0)) {
+    fail("noise_floor_gain_up must be in [0, 1]");
+  }
+  if (!(noise_floor_band >= 1.0 && std::isfinite(noise_floor_band))) {
+    fail("noise_floor_band must be >= 1");
+  }
 }
 
 EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& camera,
@@ -61,11 +71,44 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   setG0(f.g0);
   g0_tracker_ = G0Tracker(f, camera_, start);
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
+  // Noise-aware diffusion: no diffusion until the first event rate has been measured (a robot
+  // starts from rest).
+  if (config_.noise_aware_diffusion) schedule_.signal_fraction = 0.0;
   expected_ = HeadingVectorPose::from(start);
   last_normalised_ = expected_;
 }
 
-void EventSlam2d::setG0(double g0) { schedule_ = makeG0Schedule(config_.filter, camera_, g0); }
+void EventSlam2d::setG0(double g0) {
+  const double signal_fraction = schedule_.signal_fraction;
+  schedule_ = makeG0Schedule(config_.filter, camera_, g0);
+  schedule_.signal_fraction = signal_fraction;
+}
+
+void EventSlam2d::updateSignalFraction(int events, std::int64_t t_us) {
+  if (!rate_window_started_) {
+    rate_window_started_ = true;
+    rate_window_start_us_ = t_us;
+    rate_window_events_ = 0;
+    return;
+  }
+  rate_window_events_ += static_cast<std::uint64_t>(events);
+  const double dt = 1e-6 * static_cast<double>(t_us - rate_window_start_us_);
+  if (dt < config_.rate_window_s) return;
+  const double rate = static_cast<double>(rate_window_events_) / dt;
+  if (noise_floor_hz_ <= 0.0) {
+    noise_floor_hz_ = rate;
+  } else if (rate < noise_floor_hz_) {
+    noise_floor_hz_ += config_.noise_floor_gain_down * (rate - noise_floor_hz_);
+  } else if (rate < config_.noise_floor_band * noise_floor_hz_) {
+    noise_floor_hz_ += config_.noise_floor_gain_up * (rate - noise_floor_hz_);
+  }
+  // Window rates of pure background activity scatter by 1 / sqrt(n) (Poisson): rates within two
+  // standard deviations above the background estimate count as background.
+  const double margin = 1.0 + 2.0 / std::sqrt(static_cast<double>(rate_window_events_));
+  schedule_.signal_fraction = std::clamp(1.0 - margin * noise_floor_hz_ / rate, 0.0, 1.0);
+  rate_window_start_us_ = t_us;
+  rate_window_events_ = 0;
+}
 
 void EventSlam2d::setFilterConfig(const EventFilterConfig& filter) {
   Ebslam2dConfig next = config_;
@@ -93,7 +136,8 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
   // mapping after every batch.
   detail::localiseInBatches(
       events, count, camera_, f, schedule_, map_, particles_, processed_, since_resample_,
-      [&](const std::uint32_t* index, int b, bool resampled, std::size_t) {
+      [&](const std::uint32_t* index, int b, bool resampled, std::size_t batch_end) {
+        if (config_.noise_aware_diffusion) updateSignalFraction(b, events[batch_end - 1].t_us);
         // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
         particles_.weightedMean(expected_.x, expected_.y, expected_.c, expected_.s);
         if (resampled && f.adapt_g0) {

@@ -12,11 +12,11 @@ namespace ebslam::detail {
 
 /// Scores the particles against `map` for `events` in batches of at most config.batch_size
 /// (alg. 7; alg. 8's "update particles"), each batch diffused with b times the per-event variance
-/// (eq. 6.39), and resamples every config.resample_every events. After each batch,
-/// after_batch(pixel_index, b, resampled, batch_end) runs: the batch's pixel indices (row-major
-/// into the camera image), its size, whether it resampled, and the index in `events` one past
-/// the batch. `map` and `schedule` are read afresh for every batch, so the callback may change
-/// them (EB-SLAM maps, both adapt G0). The events must have been validated.
+/// (eq. 6.39) times schedule.signal_fraction, and resamples every config.resample_every events.
+/// After each batch, after_batch(pixel_index, b, resampled, batch_end) runs: the batch's pixel
+/// indices (row-major into the camera image), its size, whether it resampled, and the index in
+/// `events` one past the batch. `map` and `schedule` are read afresh for every batch, so the
+/// callback may change them (EB-SLAM maps, both adapt G0). The events must have been validated.
 template <typename AfterBatch>
 void localiseInBatches(const Event* events, std::size_t count, const CeilingCamera& camera,
                        const EventFilterConfig& config, const G0Schedule& schedule,
@@ -32,7 +32,8 @@ void localiseInBatches(const Event* events, std::size_t count, const CeilingCame
       const Event& e = events[i + j];
       index[j] = static_cast<std::uint32_t>(e.y) * camera.width() + e.x;
     }
-    const double root_b = std::sqrt(static_cast<double>(b));
+    // Diffusion variance of b events, each carrying motion with probability signal_fraction.
+    const double root_b = std::sqrt(static_cast<double>(b) * schedule.signal_fraction);
     particles.step(index, b, ox, oy, map, schedule.diffusion.sigma_xy_m * root_b,
                    schedule.diffusion.sigma_theta_rad * root_b, schedule.batch_decay[b - 1]);
     i += b;

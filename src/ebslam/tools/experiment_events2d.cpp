@@ -203,7 +203,9 @@ std::vector<T> parseList(const std::string& text) {
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
-    if constexpr (std::is_integral_v<T>) {
+    if constexpr (std::is_same_v<T, std::string>) {
+      out.push_back(item);
+    } else if constexpr (std::is_integral_v<T>) {
       out.push_back(static_cast<T>(std::stoi(item)));
     } else {
       out.push_back(static_cast<T>(std::stod(item)));
@@ -234,6 +236,8 @@ int main(int argc, char** argv) {
   std::string denoise_windows_text = "10000,20000,50000,100000,200000";
   BackgroundActivityFilterConfig denoise;
   bool noise_only = false;
+  std::string noise_variants_text = "off,filter,robust,filter+robust";
+  std::string trajectory_filter;
   app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
       ->capture_default_str();
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
@@ -268,6 +272,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--denoise-refractory", denoise.refractory_filter,
                "also the per-pixel refractory filter");
+  app.add_option("--noise-variants", noise_variants_text,
+                 "variants of the noise runs: off, filter, robust, filter+robust")
+      ->capture_default_str();
+  app.add_option("--only", trajectory_filter, "only trajectories whose name contains this");
   app.add_flag("--noise-only", noise_only,
                "only the noise runs (the default-noise runs and G0 sweeps are left out)");
   app.add_option("--denoise-windows", denoise_windows_text,
@@ -279,7 +287,10 @@ int main(int argc, char** argv) {
     std::vector<fs::path> mocap_files;
     for (const auto& entry : fs::directory_iterator(fs::path(data_dir) / "tum-groundtruth")) {
       const std::string name = entry.path().filename().string();
-      if (name.find("freiburg2_pioneer_") != std::string::npos) mocap_files.push_back(entry.path());
+      if (name.find("freiburg2_pioneer_") != std::string::npos &&
+          name.find(trajectory_filter) != std::string::npos) {
+        mocap_files.push_back(entry.path());
+      }
     }
     std::sort(mocap_files.begin(), mocap_files.end());
     if (mocap_files.empty())
@@ -382,8 +393,9 @@ int main(int argc, char** argv) {
       };
       const auto runSlam = [&](const std::string& method, int n, double g0, int seed, bool save,
                                const EventVector& events, std::ostream& out,
-                               const std::string& suffix) {
+                               const std::string& suffix, bool noise_aware = false) {
         Ebslam2dConfig config;
+        config.noise_aware_diffusion = noise_aware;
         config.filter.g0 = g0;
         config.filter.batch_size = batch;
         config.filter.num_particles = n;
@@ -473,15 +485,23 @@ int main(int argc, char** argv) {
         std::printf("  noise %g Hz: %zu events, %zu after the filter\n", rate, noisy.events.size(),
                     filtered.size());
         std::fflush(stdout);
-        for (const auto& [variant, events] :
-             {std::pair<std::string, const EventVector*>{"off", &noisy.events},
-              {"filter", &filtered}}) {
-          const std::string suffix = "," + std::string(rate_text) + "," + variant;
-          for (int seed = 1; seed <= noise_seeds; ++seed) {
-            if (!ebpf_k.empty()) {
-              runEbpf("ebpf", ebpf_k[0], g0_ebpf, seed, false, *events, noise_csv, suffix);
+        // Seeds outermost: an interrupted sweep has every variant with the same seeds.
+        const std::vector<std::string> variants = parseList<std::string>(noise_variants_text);
+        for (int seed = 1; seed <= noise_seeds; ++seed) {
+          for (const std::string& variant : variants) {
+            // off: raw events, thesis model; filter: the background-activity filter first;
+            // robust: EB-SLAM-2D's noise-aware diffusion (EB-PF runs only without it).
+            const bool use_filter = variant == "filter" || variant == "filter+robust";
+            const bool robust = variant == "robust" || variant == "filter+robust";
+            if (!use_filter && !robust && variant != "off") {
+              throw std::invalid_argument("unknown noise variant '" + variant + "'");
             }
-            runSlam("ebslam2d", 10, g0_slam, seed, false, *events, noise_csv, suffix);
+            const EventVector& events = use_filter ? filtered : noisy.events;
+            const std::string suffix = "," + std::string(rate_text) + "," + variant;
+            if (!ebpf_k.empty() && !robust) {
+              runEbpf("ebpf", ebpf_k[0], g0_ebpf, seed, false, events, noise_csv, suffix);
+            }
+            runSlam("ebslam2d", 10, g0_slam, seed, false, events, noise_csv, suffix, robust);
           }
         }
       }

@@ -43,6 +43,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--z-prior", config.normalisation_prior_px, "Z0 in M = O / (Z + Z0) [pixels]")
       ->capture_default_str();
+  app.add_flag("--noise-aware", config.noise_aware_diffusion,
+               "scale the per-event diffusion by the estimated signal fraction (robust start "
+               "under background activity)");
+  app.add_option("--rate-window", config.rate_window_s,
+                 "event-rate window of the noise-aware diffusion [s]")
+      ->capture_default_str();
   app.add_option("-o,--trajectory", trajectory_path, "output TUM trajectory");
   app.add_option("--map-png", map_png, "final map M as PNG (dark = likely to fire)");
   app.add_option("--occurrence-png", occurrence_png, "final occurrence map O as PNG");

@@ -125,6 +125,11 @@ struct TrueDepthEvent {
   /// The pixel sees a depth edge at the event time: a 4-neighbour's ray hits a surface whose
   /// depth differs by more than 10 %.
   bool at_depth_edge = false;
+  /// Nearest and farthest z [m] the rays of the pixel and its 8 neighbours hit at the event
+  /// time (the surfaces the pixel's footprint may cover); NaN where none hits. Not stored in
+  /// event files.
+  float neighbourhood_min_depth_m = 0.0f;
+  float neighbourhood_max_depth_m = 0.0f;
 };
 
 /// One frame of the depth camera.

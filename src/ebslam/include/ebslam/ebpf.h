@@ -119,6 +119,9 @@ struct G0Schedule {
   double alpha = 0.0;
   Diffusion diffusion;
   std::vector<BatchDecay> batch_decay;
+  /// Expected fraction of the events that come from motion (not background activity) in
+  /// [0, 1]: the per-event diffusion variance is scaled by it (1 = eq. 6.38).
+  double signal_fraction = 1.0;
 };
 G0Schedule makeG0Schedule(const EventFilterConfig& config, const CeilingCamera& camera, double g0);
 

@@ -1,0 +1,113 @@
+#pragma once
+
+// Depth for every eDVS event from the depth camera (thesis 8.2, fig. 8.5).
+//
+// An eDVS pixel's ray, back-projected into the depth image, is a short line segment (its
+// epipolar line between min_depth_m and max_depth_m). Once per calibration the segment's depth
+// pixels are listed per eDVS pixel, near to far, each with d_i: the depth-camera z of the ray's
+// point seen through that depth pixel. Per event the measured depths D_i at those pixels are
+// compared with d_i; the ray meets the measured surface where D_i - d_i changes sign from
+// >= 0 (ray in front of the surface) to <= 0 between two neighbouring valid samples whose
+// measured depths are continuous (the thesis' condition d_i <= D_i, D_{i+1} <= d_{i+1}); the
+// nearest such crossing is taken. The depth there is interpolated linearly in D - d (the thesis
+// averages D_i and D_{i+1}). Cost per event: at most the segment's sample count (about 20 for
+// a 4 cm baseline at 260 px focal length), independent of the image size.
+//
+// Frames: depth and 3D point in the eDVS optical frame (z = depth along the optical axis);
+// sensors.depth_from_edvs maps eDVS points into the depth optical frame.
+// Time: depth frames are placed on the event clock as stamp - depth_clock_offset_s; an event
+// takes the frame nearest in time within max_frame_age_s.
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "ebslam/dedvs_io.h"
+#include "ebslam/event.h"
+
+namespace ebslam {
+
+struct DepthFusionConfig {
+  double min_depth_m = 0.4;  ///< near end of the ray segments (eDVS z) [m]
+  double max_depth_m = 5.0;  ///< far end [m]
+  /// Largest time between an event and the depth frame it uses [s]; 1.5 frame periods at
+  /// 30 Hz. Events farther from every frame get no depth.
+  double max_frame_age_s = 0.05;
+  /// Two neighbouring samples belong to one surface when their measured depths differ by at
+  /// most this fraction of the nearer one plus the ray's own depth step between them.
+  double max_surface_jump_ratio = 0.05;
+  std::size_t frames_kept = 4;  ///< depth frames kept for the time association
+
+  void validate() const;
+};
+
+/// Why an event got no depth (kOk: it got one).
+enum class FusionStatus : std::uint8_t {
+  kOk = 0,
+  kNoDepthFrame,     ///< no frame yet
+  kOlderThanFrames,  ///< event older than every kept frame by more than max_frame_age_s
+  kNewerThanFrames,  ///< event newer than the latest frame by more than max_frame_age_s
+  kNoIntersection,   ///< the ray meets no measured surface (holes, out of range)
+  kOutsideSensor,    ///< event pixel outside the eDVS
+};
+const char* toString(FusionStatus status);
+
+struct FusedEvent {
+  Event event;
+  float depth_m = 0.0f;   ///< eDVS z [m], NaN without depth
+  Eigen::Vector3f point;  ///< eDVS optical frame [m], NaN without depth
+  FusionStatus status = FusionStatus::kOk;
+};
+
+class DepthEventFusion {
+ public:
+  /// Precomputes the ray table. Throws std::invalid_argument for invalid sensors or config.
+  explicit DepthEventFusion(const DedvsSensors& sensors, const DepthFusionConfig& config = {});
+
+  /// Adds a depth frame (CV_16UC1 millimetres with 0 = none, or CV_32FC1 metres with 0/NaN =
+  /// none) stamped on the depth camera's clock [s]. Throws std::invalid_argument for another
+  /// type or size (the frame is not kept). Frames older than the latest are ignored and
+  /// reported by the return value (false).
+  bool addDepthFrame(const cv::Mat& depth, double stamp_s);
+  void clearFrames() { frames_.clear(); }
+  std::size_t frameCount() const { return frames_.size(); }
+
+  /// Depth of one event; NaN and a status when it has none.
+  FusedEvent fuse(const Event& event) const;
+  /// Depth of an event against a given frame (metres, CV_32FC1 as stored internally), O(1).
+  float depthAt(std::uint16_t x, std::uint16_t y, const float* depth_m) const;
+
+  /// Bytes of the precomputed ray table.
+  std::size_t tableBytes() const;
+  /// Mean samples per ray.
+  double meanSamplesPerRay() const;
+  const DedvsSensors& sensors() const { return sensors_; }
+
+ private:
+  struct Sample {
+    std::uint32_t pixel;  // index into the depth image
+    float ray_depth_m;    // d_i: depth-camera z of the ray's point seen through that pixel
+  };
+  struct Ray {
+    std::uint32_t first = 0;
+    std::uint16_t count = 0;
+    float edvs_z_per_depth_z = 0.0f;  // s = (d - t_z) * this
+    Eigen::Vector3f direction;        // eDVS ray (x, y, 1)
+  };
+  struct Frame {
+    double t_event_clock_s;
+    cv::Mat depth_m;  // CV_32FC1, 0 = none
+  };
+
+  DedvsSensors sensors_;
+  DepthFusionConfig config_;
+  std::vector<Ray> rays_;
+  std::vector<Sample> samples_;
+  float depth_t_z_ = 0.0f;
+  std::deque<Frame> frames_;
+};
+
+}  // namespace ebslam
