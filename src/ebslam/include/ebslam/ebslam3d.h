@@ -63,7 +63,7 @@ struct Ebslam3dConfig {
   /// Per-event diffusion: position [m] and rotation angle [rad] standard deviations
   /// (eq. 8.11-8.15). The thesis' default set names 0.008 for both without a unit or a time
   /// base; 0.008 per event diverged on the synthetic runs tried (fr1_xyz: 0.77 m RMSE); 3e-4
-  /// lost the faster fr1_desk rotations; 1e-3 tracks both (first 8 s of fr1_desk: 2.4 cm).
+  /// lost the faster fr1_desk rotations; 1e-3 tracks both (first 8 s of fr1_desk: 2.1 cm).
   double sigma_position_m = 1e-3;
   double sigma_rotation_rad = 1e-3;
   /// alpha of the score update (alg. 9), per event.
@@ -82,7 +82,8 @@ struct Ebslam3dConfig {
   /// The thesis' "default" set (8.4): N = 100, K = 100, B = 3, all events, 1 cm voxels.
   static Ebslam3dConfig defaults() { return {}; }
   /// The "fast" set: fewer particles and events for about ten times the speed (8.4; the thesis
-  /// does not list its values, these are chosen on the tuning half, docs/results/ebslam3d.md).
+  /// does not list its values; N 25, B 5, a quarter of the events, not tuned:
+  /// docs/results/ebslam3d.md reports it beside the default set).
   static Ebslam3dConfig fast();
 
   /// Throws std::invalid_argument naming the offending parameter.
