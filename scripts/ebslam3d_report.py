@@ -137,7 +137,7 @@ def write_page(a, results, sweeps, sweep_path, partial=False):
     w(f"Regenerate: `{a.command}` (builds the core library, runs every path below, the sweeps and")
     w("the benchmark, and rewrites this page and its plots; about 15-25 min on a loaded 2-core machine).")
     w("")
-    w("**Data.** The D-eDVS simulator (issue 27) was not on main when this page was made, so the")
+    w("**Data.** The D-eDVS simulator (issue 27) was not on main when these runs started (it landed during them), so the")
     w("depth events come from the core library's own synthetic source (`synthetic_depth_events.h`):")
     w("a closed box room 1.5 m beyond each path's bounding box, its faces textured with random")
     w("rectangles and lines (3 per m^2, sampled every 1 cm); a 128x128 pinhole event sensor (f = 160 px)")
