@@ -36,7 +36,7 @@ packages=(
   libspectra-dev libceres-dev libtbb-dev libcli11-dev nlohmann-json3-dev libserialport-dev
   python3-matplotlib python3-numpy
   # headless viewing and hostname resolution
-  xvfb xauth libgl1-mesa-dri hostname
+  xvfb xauth libgl1-mesa-dri imagemagick hostname
 )
 
 # roslaunch/rostest need localhost to resolve (ROS_HOSTNAME=localhost is set by scripts/ros_env.sh).

@@ -1,0 +1,374 @@
+// Writes the sample session: one consistent simulated scene seen by both sensors of a floor robot,
+// on one clock, as a bag that launch/playback.launch plays through the pipeline.
+//  - Motion: a TUM motion-capture run of a wheeled robot (freiburg2_pioneer_*), projected to the
+//    floor plane and smoothed as for the 2D event simulator (thesis 6.5.3), started at the origin.
+//  - Scene: a room around the path (ebslam::makeRoomScene: dead-leaves textures, a shelf) with
+//    boxes on the floor that keep clear of the robot's path; the ceiling, 2.59 m above the eDVS,
+//    has the thesis' lines-and-circles texture (the floor-robot setup of 6.5.3).
+//  - eDVS: 128 x 128, looking up (optical x = forward, z = up, the EB-PF/EB-SLAM-2D mounting),
+//    the thesis' floor-robot lens (f = 86.3 px); events by the D-eDVS simulator.
+//  - RGB-D: the PrimeSense-like camera of the D-eDVS simulator looking forward 5 cm below the
+//    eDVS, colour registered to depth, frames subsampled to --rgbd-rate.
+// Topics (names of live.launch): /camera/rgb/image_rect_color (bgr8), /camera/depth_registered/
+// image_raw (16UC1 mm), /camera/rgb/camera_info, /camera/depth_registered/camera_info,
+// /edvs/events, /edvs/camera_info, /ground_truth/pose (the eDVS optical frame in map),
+// /tf (map -> ground_truth), /tf_static (base_link -> camera_rgb_optical_frame, latched).
+// Stamps: the motion capture's own clock (seconds since 1970 in the TUM files).
+//   rosrun ebslam_ros make_session --trajectory test/data/sample_session/pioneer_360_excerpt.txt
+//     --duration 8 --output test/data/session/session.bag
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "ebslam/dedvs_scene.h"
+#include "ebslam/dedvs_simulator.h"
+#include "ebslam/simulator_scenes.h"
+#include "ebslam/trajectory.h"
+#include "ebslam_ros/conversions.h"
+
+namespace {
+
+struct SessionOptions {
+  std::string trajectory;
+  std::string output;
+  double t_begin_s = 0.0;
+  double duration_s = 8.0;
+  double rgbd_rate_hz = 3.0;
+  double event_message_rate_hz = 100.0;
+  double ground_truth_rate_hz = 50.0;
+  int depth_width = 320;
+  int box_count = 8;
+  std::uint64_t seed = 1;
+  std::string compression = "bz2";
+};
+
+constexpr double kEdvsHeightM =
+    0.63;  // eDVS above the floor [m]; the Kinect of the pioneer runs is at 0.58 m
+
+// eDVS optical frame -> depth optical frame: eDVS x (robot forward) = depth z, eDVS z (up) =
+// depth -y, eDVS y (robot left) = depth -x; the eDVS sits 5 cm above the depth camera.
+Eigen::Isometry3d depthFromEdvs() {
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(0, 0, 1);
+  r.col(1) = Eigen::Vector3d(-1, 0, 0);
+  r.col(2) = Eigen::Vector3d(0, -1, 0);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = r;
+  t.translation() = Eigen::Vector3d(0.0, -0.05, 0.0);
+  return t;
+}
+
+Eigen::Isometry3d isometryOf(const ebslam::StampedPose& pose) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = pose.orientation.normalized().toRotationMatrix();
+  t.translation() = pose.position;
+  return t;
+}
+
+ebslam::StampedPose stampedPoseOf(double t_s, const Eigen::Isometry3d& t) {
+  ebslam::StampedPose pose;
+  pose.t_s = t_s;
+  pose.position = t.translation();
+  pose.orientation = Eigen::Quaterniond(t.linear());
+  return pose;
+}
+
+// Floor-robot eDVS poses (camera -> world, z up) starting at the origin with heading 0, lifted to
+// the eDVS height.
+ebslam::Trajectory edvsTrajectory(const SessionOptions& options, double* clock_origin_s) {
+  const ebslam::Trajectory mocap = ebslam::readTumTrajectory(options.trajectory);
+  if (mocap.size() < 2) throw std::runtime_error("trajectory has fewer than two poses");
+  *clock_origin_s = mocap.front().t_s;
+  ebslam::Trajectory floor = ebslam::makeFloorRobotTrajectory(mocap);
+  const Eigen::Isometry3d start_inverse = isometryOf(floor.front()).inverse();
+  for (ebslam::StampedPose& pose : floor) {
+    Eigen::Isometry3d t = start_inverse * isometryOf(pose);
+    t.translation().z() += kEdvsHeightM;
+    pose = stampedPoseOf(pose.t_s, t);
+  }
+  return floor;
+}
+
+// Boxes on the floor at least 0.6 m from every position of the path, inside the room.
+void addBoxesBesidePath(ebslam::Scene& scene, const ebslam::Trajectory& path, int count,
+                        std::uint64_t seed) {
+  Eigen::Vector2d lo = path.front().position.head<2>(), hi = lo;
+  for (const ebslam::StampedPose& p : path) {
+    lo = lo.cwiseMin(p.position.head<2>());
+    hi = hi.cwiseMax(p.position.head<2>());
+  }
+  lo -= Eigen::Vector2d(1.3, 1.3);
+  hi += Eigen::Vector2d(1.3, 1.3);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  ebslam::DeadLeavesConfig leaves;
+  leaves.size_px = 256;
+  for (int placed = 0, attempt = 0; placed < count && attempt < 2000; ++attempt) {
+    const Eigen::Vector3d size(0.25 + 0.35 * uniform(rng), 0.25 + 0.35 * uniform(rng),
+                               0.2 + 0.4 * uniform(rng));
+    const Eigen::Vector2d corner(lo.x() + uniform(rng) * (hi.x() - lo.x() - size.x()),
+                                 lo.y() + uniform(rng) * (hi.y() - lo.y() - size.y()));
+    const Eigen::Vector2d centre = corner + 0.5 * size.head<2>();
+    const double clearance = 0.6 + 0.5 * size.head<2>().norm();
+    bool clear = true;
+    for (std::size_t i = 0; i < path.size() && clear; i += 5) {
+      clear = (path[i].position.head<2>() - centre).norm() > clearance;
+    }
+    if (!clear) continue;
+    leaves.seed = seed * 1000 + static_cast<std::uint64_t>(placed) + 1;
+    leaves.contrast = 0.4 + 0.4 * uniform(rng);
+    const Eigen::Vector3f colour(static_cast<float>(0.3 + 0.7 * uniform(rng)),
+                                 static_cast<float>(0.3 + 0.7 * uniform(rng)),
+                                 static_cast<float>(0.3 + 0.7 * uniform(rng)));
+    ebslam::addBox(scene, Eigen::Vector3d(corner.x(), corner.y(), 0.0),
+                   Eigen::Vector3d(corner.x() + size.x(), corner.y() + size.y(), size.z()),
+                   ebslam::makeDeadLeavesTexture(leaves), 0.004, colour);
+    ++placed;
+  }
+}
+
+sensor_msgs::CameraInfo cameraInfo(int width, int height, double fx, double fy, double cx,
+                                   double cy, const std::string& frame_id) {
+  sensor_msgs::CameraInfo info;
+  info.header.frame_id = frame_id;
+  info.width = static_cast<std::uint32_t>(width);
+  info.height = static_cast<std::uint32_t>(height);
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {fx, 0, cx, 0, fy, cy, 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info.P = {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0};
+  return info;
+}
+
+sensor_msgs::Image imageMsg(const cv::Mat& image, const std::string& encoding,
+                            const std_msgs::Header& header) {
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.height = static_cast<std::uint32_t>(image.rows);
+  msg.width = static_cast<std::uint32_t>(image.cols);
+  msg.encoding = encoding;
+  msg.is_bigendian = 0;
+  msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize());
+  msg.data.resize(static_cast<std::size_t>(msg.step) * image.rows);
+  for (int r = 0; r < image.rows; ++r) {
+    std::memcpy(&msg.data[static_cast<std::size_t>(r) * msg.step], image.ptr(r), msg.step);
+  }
+  return msg;
+}
+
+geometry_msgs::Transform transformMsg(const Eigen::Isometry3d& t) {
+  geometry_msgs::Transform msg;
+  msg.translation.x = t.translation().x();
+  msg.translation.y = t.translation().y();
+  msg.translation.z = t.translation().z();
+  const Eigen::Quaterniond q(t.linear());
+  msg.rotation.x = q.x();
+  msg.rotation.y = q.y();
+  msg.rotation.z = q.z();
+  msg.rotation.w = q.w();
+  return msg;
+}
+
+void writeSession(const SessionOptions& options) {
+  double clock_origin_s = 0.0;
+  const ebslam::Trajectory edvs = edvsTrajectory(options, &clock_origin_s);
+  const Eigen::Isometry3d depth_from_edvs = depthFromEdvs();
+  ebslam::Trajectory rig;
+  for (const ebslam::StampedPose& pose : edvs) {
+    rig.push_back(stampedPoseOf(pose.t_s, isometryOf(pose) * depth_from_edvs.inverse()));
+  }
+  ebslam::RoomSceneConfig room;
+  room.seed = options.seed;
+  room.ceiling_height_m = kEdvsHeightM + ebslam::kThesisCeilingHeightM;
+  room.with_table = false;  // the robot would drive under it and see its underside
+  room.box_count = 0;
+  ebslam::Scene scene = ebslam::makeRoomScene(rig, room);
+  addBoxesBesidePath(scene, edvs, options.box_count, options.seed);
+  // The ceiling carries the thesis' floor-robot texture (lines and circles, 6.5.3), which the
+  // 2D simulator and the EB-PF/EB-SLAM-2D defaults use: about 40k events/s on these runs.
+  ebslam::LinesAndCirclesConfig lines;
+  lines.seed = options.seed;
+  for (ebslam::TexturedPlane& plane : scene.planes) {
+    const bool horizontal = std::abs(plane.pose.linear().col(2).z()) > 0.99;
+    if (horizontal && plane.pose.translation().z() > room.ceiling_height_m - 0.01) {
+      plane.texture = ebslam::makeLinesAndCirclesTexture(lines);
+      plane.metres_per_texel = 0.01;
+      plane.repeat = true;
+    }
+  }
+
+  ebslam::DedvsSimulatorConfig config;
+  config.edvs = ebslam::CameraModel{};  // the thesis' floor-robot eDVS (6.5.3)
+  config.depth_from_edvs = depth_from_edvs;
+  config.depth.camera = config.depth.camera.scaled(options.depth_width / 320.0);
+  config.seed = options.seed;
+  config.events.seed = options.seed;
+  const ebslam::DedvsSimulator simulator(config);
+
+  rosbag::Bag bag(options.output, rosbag::bagmode::Write);
+  if (options.compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
+  if (options.compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
+
+  const ebslam_ros::TimeAnchor anchor{ros::Time(clock_origin_s), 0, 1.0};
+  const ebslam::CameraModel& edvs_camera = config.edvs;
+  const ebslam::PinholeCamera& depth_camera = config.depth.camera;
+  const std::string rgb_frame = "camera_rgb_optical_frame";
+  const std::string edvs_frame = "edvs_optical_frame";
+
+  // Static mounting, latched as tf2's static publisher sends it.
+  {
+    tf2_msgs::TFMessage statics;
+    geometry_msgs::TransformStamped mount;
+    mount.header.stamp = ros::Time(clock_origin_s + options.t_begin_s);
+    mount.header.frame_id = "base_link";
+    mount.child_frame_id = rgb_frame;
+    mount.transform =
+        transformMsg(depth_from_edvs.inverse());  // base_link = eDVS position, x forward
+    statics.transforms.push_back(mount);
+    auto header = boost::make_shared<std::map<std::string, std::string>>();
+    (*header)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
+    (*header)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
+    (*header)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
+    (*header)["latching"] = "1";
+    (*header)["callerid"] = "/make_session";
+    bag.write("/tf_static", mount.header.stamp, statics, header);
+  }
+
+  ebslam::EventVector pending;
+  std::int64_t message_end_us = 0;
+  const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
+  std::size_t event_count = 0, event_messages = 0, rgbd_frames = 0;
+  auto flush_events = [&]() {
+    if (pending.empty()) return;
+    const ebslam_msgs::EventArray msg =
+        ebslam_ros::toEventArrayMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame, anchor);
+    bag.write("/edvs/events", msg.header.stamp, msg);
+    sensor_msgs::CameraInfo info = cameraInfo(
+        edvs_camera.width, edvs_camera.height, edvs_camera.focal_px, edvs_camera.focal_px,
+        edvs_camera.principal_point.x(), edvs_camera.principal_point.y(), edvs_frame);
+    info.header.stamp = msg.header.stamp;
+    if (event_messages % 10 == 0) bag.write("/edvs/camera_info", msg.header.stamp, info);
+    event_count += pending.size();
+    ++event_messages;
+    pending.clear();
+  };
+  const auto on_events = [&](const std::vector<ebslam::TrueDepthEvent>& events) {
+    for (const ebslam::TrueDepthEvent& e : events) {
+      if (message_end_us == 0) message_end_us = e.event.t_us + period_us;
+      while (e.event.t_us >= message_end_us) {
+        flush_events();
+        message_end_us += period_us;
+      }
+      pending.push_back(e.event);
+    }
+  };
+  const int frame_step =
+      std::max(1, static_cast<int>(config.depth.frame_rate_hz / options.rgbd_rate_hz + 0.5));
+  int frame_index = 0;
+  const auto on_depth = [&](const ebslam::DepthFrame& frame) {
+    if (frame_index++ % frame_step != 0) return;
+    flush_events();  // events before the frame go first, as a live system would receive them
+    std_msgs::Header header;
+    header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
+    header.frame_id = rgb_frame;
+    bag.write("/camera/rgb/image_rect_color", header.stamp, imageMsg(frame.colour, "bgr8", header));
+    bag.write("/camera/depth_registered/image_raw", header.stamp,
+              imageMsg(frame.depth_mm, "16UC1", header));
+    sensor_msgs::CameraInfo info =
+        cameraInfo(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
+                   depth_camera.cx, depth_camera.cy, rgb_frame);
+    info.header = header;
+    bag.write("/camera/rgb/camera_info", header.stamp, info);
+    bag.write("/camera/depth_registered/camera_info", header.stamp, info);
+    ++rgbd_frames;
+  };
+  const double t_end = std::min(edvs.back().t_s, options.t_begin_s + options.duration_s);
+  const ebslam::DedvsRun run =
+      simulator.simulate(scene, rig, options.t_begin_s, t_end, on_events, on_depth);
+  flush_events();
+
+  std::size_t ground_truth_poses = 0;
+  const double step = 1.0 / options.ground_truth_rate_hz;
+  double next_t = -1.0;
+  for (const ebslam::StampedPose& pose : run.edvs_ground_truth) {
+    if (pose.t_s < next_t) continue;
+    next_t = pose.t_s + step;
+    const ros::Time stamp(clock_origin_s + pose.t_s);
+    Eigen::Isometry3d in_map = isometryOf(pose);
+    in_map.translation().z() -= kEdvsHeightM;  // map frame on the floor under the start pose
+    geometry_msgs::PoseStamped msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = "map";
+    const geometry_msgs::Transform t = transformMsg(in_map);
+    msg.pose.position.x = t.translation.x;
+    msg.pose.position.y = t.translation.y;
+    msg.pose.position.z = t.translation.z;
+    msg.pose.orientation = t.rotation;
+    bag.write("/ground_truth/pose", stamp, msg);
+    tf2_msgs::TFMessage tf;
+    geometry_msgs::TransformStamped ts;
+    ts.header = msg.header;
+    ts.child_frame_id = "ground_truth";
+    ts.transform = t;
+    tf.transforms.push_back(ts);
+    bag.write("/tf", stamp, tf);
+    ++ground_truth_poses;
+  }
+  bag.close();
+  std::printf(
+      "session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu RGB-D frames "
+      "%dx%d, %zu ground-truth poses, %zu scene planes\n",
+      options.output.c_str(), t_end - options.t_begin_s, event_count, event_messages,
+      event_count / std::max(1e-9, t_end - options.t_begin_s), rgbd_frames, depth_camera.width,
+      depth_camera.height, ground_truth_poses, scene.planes.size());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Simulated session bag: floor robot with an upward eDVS and a forward RGB-D camera"};
+  SessionOptions options;
+  app.add_option("--trajectory", options.trajectory, "TUM motion capture of a wheeled robot")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--output", options.output, "bag to write")->required();
+  app.add_option("--t-begin", options.t_begin_s, "start [s after the trajectory start]")
+      ->capture_default_str();
+  app.add_option("--duration", options.duration_s, "simulated time [s]")->capture_default_str();
+  app.add_option("--rgbd-rate", options.rgbd_rate_hz, "RGB-D frames per second kept [Hz]")
+      ->capture_default_str();
+  app.add_option("--depth-width", options.depth_width, "RGB-D width: 320 or 640")
+      ->capture_default_str()
+      ->check(CLI::IsMember({320, 640}));
+  app.add_option("--boxes", options.box_count, "boxes on the floor")->capture_default_str();
+  app.add_option("--seed", options.seed, "seed of the room, events and depth noise")
+      ->capture_default_str();
+  app.add_option("--compression", options.compression, "bag compression")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "lz4", "bz2"}));
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (options.duration_s <= 0.0 || options.rgbd_rate_hz <= 0.0) {
+      throw std::invalid_argument("--duration and --rgbd-rate must be positive");
+    }
+    writeSession(options);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "make_session: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}
