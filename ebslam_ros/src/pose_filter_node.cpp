@@ -203,10 +203,11 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
     if (segment.restart) {
       ++restarts_;
       ++bad_input_seen_;
-      ROS_WARN_THROTTLE(kWarnPeriodS,
-                        "%s: event time jumped back by %.3f s (a looping bag or a sensor "
-                        "reconnect?): filter restarted at the initial pose",
-                        name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
+      // Not throttled: a restart is rare, and throttling on ROS time would hide every loop of
+      // a bag after the first (the same stamps come back).
+      ROS_WARN("%s: event time jumped back by %.3f s (a looping bag or a sensor "
+               "reconnect?): filter restarted at the initial pose",
+               name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
       backend_.reset();
       start_pose_ = config_.initial_pose;
     }
