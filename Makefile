@@ -1,5 +1,5 @@
 # The two commands: `make demo` and `make test` (each installs what it needs first).
-.PHONY: all deps build test demo format lint clean
+.PHONY: all deps build test test-sanitize demo format lint clean
 
 SHELL := /bin/bash
 REPO := $(CURDIR)
@@ -14,6 +14,10 @@ build: deps
 
 test: deps
 	@bash scripts/ws.sh test
+
+# The core libraries (ebslam, dasp, eDVS core) in Debug with ASan + UBSan, and their tests.
+test-sanitize: deps
+	@bash scripts/test_sanitize.sh
 
 demo: deps
 	@bash scripts/ws.sh build
