@@ -46,14 +46,23 @@ run_tests() {
   rm -rf "${results}"
   mkdir -p "${results}"
   local status=0
-  while read -r name path; do
+  local packages=()
+  mapfile -t packages < <(find "${repo}" -name package.xml -not -path "${ws}/*" | sort | while read -r xml; do
+                            dir=$(dirname "${xml}")
+                            [ -e "${dir}/CATKIN_IGNORE" ] && continue
+                            echo "$(sed -n 's:.*<name>\(.*\)</name>.*:\1:p' "${xml}" | head -n1) ${dir#"${repo}"/}"
+                          done)
+  local entry name path
+  for entry in "${packages[@]}"; do
+    read -r name path <<<"${entry}"
     local build_dir="${ws}/build/${name}"
     [ -d "${build_dir}" ] || { echo "ws: no build folder for ${name}" >&2; status=1; continue; }
     echo "=== tests of ${name}"
     if [ "$(package_build_type "${repo}/${path}")" = cmake ]; then
       # Plain CMake package: its gtest cases are ctest tests; ctest writes JUnit.
       if [ -f "${build_dir}/CTestTestfile.cmake" ]; then
-        (cd "${build_dir}" && ctest --output-on-failure --timeout 600 -j "${jobs}" \
+        # Tests read no standard input (rosbag play would take the package list below as key presses).
+        (cd "${build_dir}" && ctest --output-on-failure --timeout 600 -j "${jobs}" </dev/null \
           --output-junit "${results}/${name}-ctest.xml") | tail -n 25 || status=1
       else
         echo "ws: ${name} has no CTestTestfile.cmake: its tests were not configured" >&2
@@ -61,18 +70,14 @@ run_tests() {
       fi
     else
       # catkin package: run_tests writes gtest/rostest XML (a crashed test gets a MISSING-result failure).
-      make -C "${build_dir}" run_tests >"${results}/${name}-run_tests.log" 2>&1 || status=1
+      make -C "${build_dir}" run_tests </dev/null >"${results}/${name}-run_tests.log" 2>&1 || status=1
       tail -n 40 "${results}/${name}-run_tests.log" | grep -E '^\[ *(OK|FAILED|PASSED|RUN) *\]|FAILURE|ERROR|SUMMARY|Ran ' || true
       if [ -d "${build_dir}/test_results/${name}" ]; then
         mkdir -p "${results}/${name}"
         cp "${build_dir}/test_results/${name}"/*.xml "${results}/${name}/" 2>/dev/null || true
       fi
     fi
-  done < <(find "${repo}" -name package.xml -not -path "${ws}/*" | sort | while read -r xml; do
-             dir=$(dirname "${xml}")
-             [ -e "${dir}/CATKIN_IGNORE" ] && continue
-             echo "$(sed -n 's:.*<name>\(.*\)</name>.*:\1:p' "${xml}" | head -n1) ${dir#"${repo}"/}"
-           done)
+  done
   # catkin_test_results checks catkin's own XML; our counter reads every file once (no double counting).
   catkin_test_results "${results}" >/dev/null 2>&1 || status=1
   /usr/bin/python3 "${repo}/scripts/count_junit.py" "${results}" || status=1
