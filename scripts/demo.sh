@@ -54,7 +54,7 @@ if command -v Xvfb >/dev/null && command -v rviz >/dev/null && [ -x /usr/bin/imp
   (sleep 14 && DISPLAY="${display}" /usr/bin/import -window root "${pb}/rviz.png" >/dev/null 2>&1) &
 fi
 if DISPLAY="${display:-}" LIBGL_ALWAYS_SOFTWARE=1 roslaunch -p "${port}" "${repo}/launch/demo_playback.launch" \
-  output_dir:="${pb}" rviz:="${rviz_arg}" >"${out}/logs/playback_roslaunch.log" 2>&1 &&
+  output_dir:="${pb}" rviz:="${rviz_arg}" </dev/null >"${out}/logs/playback_roslaunch.log" 2>&1 &&
   /usr/bin/python3 "${repo}/scripts/demo_outputs.py" "${pb}/demo.bag" "${pb}" >"${pb}/topics_summary.txt"; then
   ebslam_evaluate_trajectory --no-time-offset "${pb}/trajectory.tum" "${pb}/ground_truth.tum" >"${pb}/trajectory_eval.txt" 2>&1 || status=1
   note "  playback of test/data/session/session.bag (outputs in demo_output/playback):"
