@@ -2,7 +2,8 @@
 //
 // Publication (relative name): events (ebslam_msgs/EventArray). Every ~publish_rate a message
 // carries the events whose time has come. Event ts = wall time at the start of playback +
-// (t_us - first t_us) / ~speed; header.stamp = ts of the last event; header.frame_id = ~frame_id.
+// (t_us - first t_us) / ~speed (ebslam::EventClock, unclamped: file order is kept);
+// header.stamp = ts of the last event; header.frame_id = ~frame_id.
 // A damaged file is played up to the damage and the damage is logged. Timestamps that run
 // backwards in the file are published in file order (counted and reported at the end).
 // Damaged times are reported (throttled error) and never stop playback: a step of the file's
@@ -14,6 +15,7 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
+#include <ebslam/event_clock.h>
 #include <ebslam/event_io.h>
 
 #include <algorithm>
@@ -23,7 +25,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -58,19 +60,19 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
     if (reader_->error()) throw std::runtime_error(*reader_->error());
     pending_.clear();
     pending_index_ = 0;
-    anchored_ = false;
+    clock_ = ebslam::EventClock(config_.speed);
     file_index_ = 0;
     held_.reset();
     last_t_us_.reset();
-    last_stamp_ = ros::Time();
+    last_stamp_us_ = 0;
     dropped_ = 0;
     gaps_skipped_ = 0;
   }
 
   // Publishes every event whose playback time is at or before now.
   void publishDue(const ros::WallTimerEvent&) {
-    if (!anchored_ && config_.wait_for_subscribers && !subscriberSettled()) return;
-    const ros::Time now = ros::Time::now();
+    if (!clock_.anchored() && config_.wait_for_subscribers && !subscriberSettled()) return;
+    const std::int64_t now_us = ebslam_msgs::toMicroseconds(ros::Time::now());
     // Stamped as each event is accepted: a skipped gap moves the anchor within a batch.
     ebslam_msgs::EventArray msg;
     while (true) {
@@ -79,14 +81,11 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
         if (reader_->next(pending_, kReadBatch) == 0) break;
       }
       const ebslam::Event& event = pending_[pending_index_];
-      if (!anchored_) {
-        anchor_ = TimeAnchor{now, event.t_us, config_.speed};
-        anchored_ = true;
-      }
+      if (!clock_.anchored()) clock_.anchor(event.t_us, now_us);
       if (held_) {
         if (std::abs(stepSeconds(held_->event.t_us, event.t_us)) <= config_.max_gap_s) {
-          skipGapTo(*held_, now);
-          msg.events.push_back(eventMsg(held_->event, last_stamp_));
+          skipGapTo(*held_, now_us);
+          msg.events.push_back(eventMsg(held_->event, last_stamp_us_));
         } else {
           drop(*held_, "steps away from both its neighbours");
         }
@@ -98,16 +97,16 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
         ++pending_index_;
         continue;
       }
-      const std::optional<ros::Time> stamp = rosTimeOf(event.t_us, anchor_);
-      if (!stamp) {
+      const std::optional<std::int64_t> stamp_us = clock_.map(event.t_us);
+      if (!stamp_us || !ebslam_msgs::rosTimeOf(*stamp_us)) {
         drop(Held{event, file_index_++}, "maps outside the range of ros::Time");
         ++pending_index_;
         continue;
       }
-      if (*stamp > now) break;
-      msg.events.push_back(eventMsg(event, *stamp));
+      if (*stamp_us > now_us) break;
+      msg.events.push_back(eventMsg(event, *stamp_us));
       last_t_us_ = event.t_us;
-      last_stamp_ = *stamp;
+      last_stamp_us_ = *stamp_us;
       ++file_index_;
       ++pending_index_;
     }
@@ -132,13 +131,9 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
     std::size_t index = 0;
   };
 
-  static ebslam_msgs::Event eventMsg(const ebslam::Event& event, const ros::Time& stamp) {
-    ebslam_msgs::Event msg;
-    msg.x = event.x;
-    msg.y = event.y;
-    msg.ts = stamp;
-    msg.polarity = event.polarity;
-    return msg;
+  // The event at published time stamp_us (checked by the caller to lie within ros::Time).
+  static ebslam_msgs::Event eventMsg(const ebslam::Event& event, std::int64_t stamp_us) {
+    return ebslam_msgs::toMsg(ebslam::Event{stamp_us, event.x, event.y, event.polarity});
   }
 
   // Step of the file's clock from a to b [s of stream time] (no integer overflow).
@@ -148,11 +143,11 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
 
   // Plays `held` at once, right after the last published event: the anchor moves so that the
   // gap in the file's clock before it takes no wall time (later stamps shift by the same).
-  void skipGapTo(const Held& held, const ros::Time& now) {
+  void skipGapTo(const Held& held, std::int64_t now_us) {
     const double gap_s = last_t_us_ ? stepSeconds(*last_t_us_, held.event.t_us) : 0.0;
-    anchor_ = TimeAnchor{std::max(now, last_stamp_), held.event.t_us, config_.speed};
+    clock_.anchor(held.event.t_us, std::max(now_us, last_stamp_us_));
     last_t_us_ = held.event.t_us;
-    last_stamp_ = anchor_.ros_time;
+    last_stamp_us_ = clock_.anchorPublished();
     ++gaps_skipped_;
     NODELET_WARN_THROTTLE(1.0,
                           "'%s': the file's clock steps by %.6f s before event %zu (t = %ld us): "
@@ -219,12 +214,11 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
   std::unique_ptr<ebslam::EventFileReader> reader_;
   ebslam::EventVector pending_;
   std::size_t pending_index_ = 0;
-  bool anchored_ = false;
-  TimeAnchor anchor_;
+  ebslam::EventClock clock_;  // file time -> ROS time, anchored at the start of playback
   std::size_t file_index_ = 0;             // index in the file of pending_[pending_index_]
   std::optional<Held> held_;               // the event after a long step, until the next one
   std::optional<std::int64_t> last_t_us_;  // file time of the last published event [us]
-  ros::Time last_stamp_;                   // its stamp
+  std::int64_t last_stamp_us_ = 0;         // its stamp [us since the ROS epoch]
   std::size_t dropped_ = 0;                // events with damaged times
   std::size_t gaps_skipped_ = 0;
   std::uint32_t sequence_ = 0;

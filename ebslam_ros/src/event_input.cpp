@@ -1,6 +1,6 @@
 #include "ebslam_ros/event_input.h"
 
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace ebslam_ros {
 
@@ -19,7 +19,7 @@ EventInputResult EventInputGuard::take(const ebslam_msgs::EventArray& msg) {
       ++result.outside;
       continue;
     }
-    std::int64_t t_us = toMicroseconds(e.ts);
+    std::int64_t t_us = ebslam_msgs::toMicroseconds(e.ts);
     if (last_t_us_ != kNoTime) {
       if (t_us < last_t_us_) {
         if (last_t_us_ - t_us <= max_backward_us_) {

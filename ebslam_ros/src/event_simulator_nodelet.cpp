@@ -21,6 +21,7 @@
 #include <rosgraph_msgs/Clock.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <ebslam/event_clock.h>
 #include <ebslam/simulator.h>
 #include <ebslam/simulator_scenes.h>
 #include <ebslam/trajectory.h>
@@ -34,7 +35,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -118,7 +119,8 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     const ros::Time anchor_time =
         config_.publish_clock ? ros::Time(config_.clock_start_s) : ros::Time::now();
     // Stream time of the simulator is round(t_s * 1e6) on the trajectory clock.
-    anchor_ = TimeAnchor{anchor_time, std::llround(t_begin_ * 1e6), stamp_speed};
+    clock_ = ebslam::EventClock(stamp_speed);
+    clock_.anchor(std::llround(t_begin_ * 1e6), ebslam_msgs::toMicroseconds(anchor_time));
     wall_start_ = ros::WallTime::now();
     next_boundary_us_ = std::llround(t_begin_ * 1e6) + periodUs();
     if (config_.publish_clock) publishClock(anchor_time);
@@ -157,10 +159,11 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
       (due - now).sleep();
     }
     if (stop_) throw Stopped{};
-    const ros::Time stamp_end = toRosTime(end_us, anchor_);
+    const ros::Time stamp_end = ebslam_msgs::toRosTime(clock_.map(end_us).value_or(-1));
     if (config_.publish_clock) publishClock(stamp_end);
     if (!pending_.empty()) {
-      ebslam_msgs::EventArray msg = toEventArrayMsg(pending_, sensor, config_.frame_id, anchor_);
+      for (ebslam::Event& e : pending_) e.t_us = clock_.stamp(e.t_us).value_or(-1);
+      ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(pending_, sensor, config_.frame_id);
       msg.header.seq = sequence_++;
       events_pub_.publish(msg);
       pending_.clear();
@@ -212,7 +215,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   ebslam::Scene scene_;
   std::unique_ptr<ebslam::EventSimulator> simulator_;
   double t_begin_ = 0.0, t_end_ = 0.0;
-  TimeAnchor anchor_;
+  ebslam::EventClock clock_;  // simulated time -> ROS time
   ros::WallTime wall_start_;
   std::int64_t next_boundary_us_ = 0;
   ebslam::EventVector pending_;

@@ -37,7 +37,8 @@
 #include "ebslam/dedvs_simulator.h"
 #include "ebslam/simulator_scenes.h"
 #include "ebslam/trajectory.h"
-#include "ebslam_ros/conversions.h"
+#include "ebslam/event_clock.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace {
 
@@ -223,7 +224,9 @@ void writeSession(const SessionOptions& options) {
   if (options.compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
   if (options.compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
 
-  const ebslam_ros::TimeAnchor anchor{ros::Time(clock_origin_s), 0, 1.0};
+  // Simulated time t [us] is recorded at ROS time clock_origin_s + t.
+  ebslam::EventClock clock;
+  clock.anchor(0, ebslam_msgs::toMicroseconds(ros::Time(clock_origin_s)));
   const ebslam::CameraModel& edvs_camera = config.edvs;
   const ebslam::PinholeCamera& depth_camera = config.depth.camera;
   const std::string rgb_frame = "camera_rgb_optical_frame";
@@ -254,8 +257,9 @@ void writeSession(const SessionOptions& options) {
   std::size_t event_count = 0, event_messages = 0, rgbd_frames = 0;
   auto flush_events = [&]() {
     if (pending.empty()) return;
+    for (ebslam::Event& e : pending) e.t_us = clock.stamp(e.t_us).value_or(-1);
     const ebslam_msgs::EventArray msg =
-        ebslam_ros::toEventArrayMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame, anchor);
+        ebslam_msgs::toMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame);
     bag.write("/edvs/events", msg.header.stamp, msg);
     sensor_msgs::CameraInfo info = cameraInfo(
         edvs_camera.width, edvs_camera.height, edvs_camera.focal_px, edvs_camera.focal_px,

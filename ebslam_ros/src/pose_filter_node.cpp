@@ -13,7 +13,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace ebslam_ros {
 
@@ -224,7 +224,7 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
                            error.what());
         continue;
       }
-      publish(fromMicroseconds(segment.events[i + n - 1].t_us));
+      publish(ebslam_msgs::toRosTime(segment.events[i + n - 1].t_us));
     }
   }
   processing_s_ +=

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace {
 
@@ -13,7 +13,7 @@ constexpr std::int64_t kBase = 1700000000000000;  // [us since the ROS epoch]
 
 ebslam_msgs::Event event(std::int64_t t_us, int x, int y, bool polarity = true) {
   ebslam_msgs::Event e;
-  e.ts = ebslam_ros::fromMicroseconds(t_us);
+  e.ts = ebslam_msgs::toRosTime(t_us);
   e.x = static_cast<std::uint16_t>(x);
   e.y = static_cast<std::uint16_t>(y);
   e.polarity = polarity;
@@ -25,15 +25,6 @@ ebslam_msgs::EventArray array(std::vector<ebslam_msgs::Event> events, std::uint3
   msg.width = msg.height = size;
   msg.events = std::move(events);
   return msg;
-}
-
-TEST(EventInput, MicrosecondsRoundTripExactly) {
-  for (std::int64_t t : {std::int64_t{0}, std::int64_t{1}, kBase, kBase + 999999}) {
-    EXPECT_EQ(ebslam_ros::toMicroseconds(ebslam_ros::fromMicroseconds(t)), t);
-  }
-  EXPECT_EQ(ebslam_ros::toMicroseconds(ros::Time(1, 499)), 1000000);
-  EXPECT_EQ(ebslam_ros::toMicroseconds(ros::Time(1, 500)), 1000001);
-  EXPECT_THROW(ebslam_ros::fromMicroseconds(-1), std::invalid_argument);
 }
 
 TEST(EventInput, PassesGoodEventsAndDropsOutsideOnes) {

@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "ebslam_ros/ceiling_map_io.h"
-#include "ebslam_ros/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace {
 
@@ -103,7 +103,7 @@ class PoseFilterTest : public ::testing::Test {
       ebslam_msgs::Event& e = msg.events[i];
       e.x = static_cast<std::uint16_t>(p.first);
       e.y = static_cast<std::uint16_t>(p.second);
-      e.ts = ebslam_ros::fromMicroseconds(t_us + static_cast<std::int64_t>(i) * dt_us);
+      e.ts = ebslam_msgs::toRosTime(t_us + static_cast<std::int64_t>(i) * dt_us);
       e.polarity = (i & 1u) != 0;
     }
     if (count > 0) msg.header.stamp = msg.events.back().ts;
@@ -151,7 +151,7 @@ TEST_F(PoseFilterTest, PosesCarryTheLastEventsStampMapFrameAndSpread) {
   const std::int64_t end = feed(g_next_t, 20);
   const auto& last = poses_.back();
   EXPECT_EQ(last.header.frame_id, "map");
-  EXPECT_EQ(ebslam_ros::toMicroseconds(last.header.stamp), end - 10000 + 1999 * 5);
+  EXPECT_EQ(ebslam_msgs::toMicroseconds(last.header.stamp), end - 10000 + 1999 * 5);
   expectNear(last.pose.pose, kStartX, kStartY, kStartTheta, 0.05);
   const auto& c = last.pose.covariance;
   EXPECT_GT(c[0], 0.0);
@@ -246,7 +246,7 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   const std::size_t before = poses_.size();
   // Empty array: no pose.
   ebslam_msgs::EventArray empty = makeEvents(t, 0);
-  empty.header.stamp = ebslam_ros::fromMicroseconds(t);
+  empty.header.stamp = ebslam_msgs::toRosTime(t);
   events_pub_.publish(empty);
   // Events outside width x height only: nothing to process, no pose.
   ebslam_msgs::EventArray outside = makeEvents(t, 100);
@@ -273,7 +273,7 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   // Time runs back by 20 s (a looping bag): the filter restarts, stamps follow the events.
   const std::int64_t back = t - 20000000;
   ASSERT_TRUE(publishAndAwait(makeEvents(back, 2000, 5)));
-  EXPECT_EQ(ebslam_ros::toMicroseconds(poses_.back().header.stamp), back + 1999 * 5);
+  EXPECT_EQ(ebslam_msgs::toMicroseconds(poses_.back().header.stamp), back + 1999 * 5);
   expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
   t = feed(back + 10000, 2);
 
@@ -345,7 +345,7 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   }
   EXPECT_GE(on_line, 50);
   EXPECT_EQ(cell(8.0, 8.0), -1);
-  EXPECT_LE(ebslam_ros::toMicroseconds(grid.header.stamp), t);
+  EXPECT_LE(ebslam_msgs::toMicroseconds(grid.header.stamp), t);
   ASSERT_TRUE(PoseFilterTest::waitFor([&] { return !images.empty(); }, 5.0));
   EXPECT_EQ(images.back().encoding, "mono8");
   EXPECT_EQ(images.back().width, grid.info.width);

@@ -6,7 +6,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "edvs_driver/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace edvs_driver {
 
@@ -31,7 +31,7 @@ BagReadResult readEventBag(const std::string& path, const std::string& topic) {
     for (const rosbag::MessageInstance& m : view) {
       const auto msg = m.instantiate<ebslam_msgs::EventArray>();
       if (!msg) continue;
-      const ebslam::SensorSize size = appendFromMsg(*msg, result.events);
+      const ebslam::SensorSize size = ebslam_msgs::appendFromMsg(*msg, result.events);
       if (result.messages == 0) result.sensor = size;
       ++result.messages;
     }
@@ -58,7 +58,7 @@ void writeEventBag(const std::string& path, const ebslam::EventVector& events,
       }
       const ebslam::EventVector batch(events.begin() + static_cast<long>(begin),
                                       events.begin() + static_cast<long>(end));
-      const ebslam_msgs::EventArray msg = toMsg(batch, sensor, options.frame_id);
+      const ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(batch, sensor, options.frame_id);
       // rosbag refuses times below TIME_MIN; files often start at t = 0.
       const ros::Time when = std::max(msg.header.stamp, ros::TIME_MIN);
       bag.write(options.topic, when, msg);

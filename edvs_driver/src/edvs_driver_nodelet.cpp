@@ -6,9 +6,9 @@
 // the device once the backoff delay after a failure has passed; the worker does the blocking
 // open (reset, banner wait) and then reads until the device goes away.
 //
-// Time semantics: see README.md. Event ts = ROS time of the read that delivered the first event
-// of the stream (the anchor, taken once per stream) + (unwrapped device time - device time of
-// that first event). Never runs backwards, not even across reconnects.
+// Time semantics: see README.md and ebslam/event_clock.h. Event ts = ROS time of the read that
+// delivered the first event of the stream (the anchor, taken once per stream) + (unwrapped device
+// time - device time of that first event). Never runs backwards, not even across reconnects.
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -24,10 +24,12 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
+#include "ebslam/event_clock.h"
+#include "ebslam_msgs/event_conversions.h"
 #include "edvs_driver/EdvsConfig.h"
-#include "edvs_driver/conversions.h"
 #include "edvs_driver/device.h"
 #include "edvs_driver/ros_params.h"
 
@@ -96,11 +98,8 @@ class EdvsDriverNodelet : public nodelet::Nodelet {
 
   std::mutex publish_mutex_;  // keeps messages in order between the timer and batch publishing
 
-  // Worker-only time anchoring.
-  bool anchored_ = false;
-  std::int64_t anchor_ros_us_ = 0;
-  std::int64_t first_device_us_ = 0;
-  std::int64_t last_stamp_us_ = 0;
+  // Worker only: device time -> ROS time, anchored once per stream, never backwards.
+  ebslam::EventClock clock_;
 };
 
 void EdvsDriverNodelet::onInit() {
@@ -230,7 +229,7 @@ bool EdvsDriverNodelet::connect() {
   link_ = Link::kStreaming;
   banner_ = device_->banner();
   last_data_us_ = monotonicMicros();
-  anchored_ = false;  // a new stream gets a new anchor
+  clock_.unanchor();  // a new stream gets a new anchor
   if (connects_ > 1) {
     NODELET_WARN("edvs_driver: reconnected to %s (reconnect %lu)", device_->describe().c_str(),
                  static_cast<unsigned long>(connects_ - 1));
@@ -297,17 +296,15 @@ void EdvsDriverNodelet::readLoop() {
 }
 
 void EdvsDriverNodelet::stampAndQueue(ebslam::EventVector& batch) {
-  if (!anchored_) {
+  if (!clock_.anchored()) {
     // Once per stream: this read's ROS time is the time of the stream's first event.
-    const std::int64_t now_us = fromRosTime(ros::Time::now());
-    anchor_ros_us_ = std::max(now_us, last_stamp_us_);
-    first_device_us_ = batch.front().t_us;
-    anchored_ = true;
+    clock_.anchor(batch.front().t_us, ebslam_msgs::toMicroseconds(ros::Time::now()));
   }
   for (ebslam::Event& e : batch) {
-    const std::int64_t t = anchor_ros_us_ + (e.t_us - first_device_us_);
-    e.t_us = std::max(t, last_stamp_us_);
-    last_stamp_us_ = e.t_us;
+    // The parser's 64-bit device clock starts near 0: no overflow in practice; were there one,
+    // the event keeps the previous stamp rather than a wrapped one.
+    const std::optional<std::int64_t> stamp = clock_.stamp(e.t_us);
+    e.t_us = stamp ? *stamp : clock_.lastStamp().value_or(clock_.anchorPublished());
   }
   std::lock_guard<std::mutex> lock(mutex_);
   pending_.insert(pending_.end(), batch.begin(), batch.end());
@@ -336,7 +333,7 @@ void EdvsDriverNodelet::publishPending(bool full_batches_only) {
   for (const ebslam::EventVector& events : messages) {
     ebslam_msgs::EventArray msg;
     try {
-      msg = toMsg(events, ebslam::SensorSize{128, 128}, params_.frame_id);
+      msg = ebslam_msgs::toMsg(events, ebslam::SensorSize{128, 128}, params_.frame_id);
     } catch (const std::invalid_argument& e) {
       NODELET_ERROR_THROTTLE(5.0, "edvs_driver: dropping a batch: %s", e.what());
       continue;

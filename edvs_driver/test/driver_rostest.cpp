@@ -14,7 +14,7 @@
 #include <mutex>
 
 #include "edvs_driver/bag_io.h"
-#include "edvs_driver/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 #include "edvs_driver/device.h"
 #include "edvs_driver/emulator.h"
 
@@ -37,7 +37,7 @@ class EventSink {
   void callback(const ebslam_msgs::EventArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     messages_.push_back(*msg);
-    edvs_driver::appendFromMsg(*msg, events_);
+    ebslam_msgs::appendFromMsg(*msg, events_);
   }
   std::size_t size() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -88,12 +88,12 @@ TEST(EdvsDriverNode, PublishesExactlyTheKnownSequenceAndBagPlaybackIsIdentical) 
   ec.seed = kSeed;
   ec.rate_hz = kRate;
   ec.max_events = kCount;
-  const std::int64_t before_us = edvs_driver::fromRosTime(ros::Time::now());
+  const std::int64_t before_us = ebslam_msgs::toMicroseconds(ros::Time::now());
   auto emulator = std::make_unique<edvs_driver::Emulator>(ec);
   ASSERT_TRUE(waitFor([&] { return sink.size() >= kCount; }, 30.0))
       << "received " << sink.size() << " of " << kCount << " events";
   ros::WallDuration(0.3).sleep();
-  const std::int64_t after_us = edvs_driver::fromRosTime(ros::Time::now());
+  const std::int64_t after_us = ebslam_msgs::toMicroseconds(ros::Time::now());
 
   const ebslam::EventVector got = sink.events();
   const ebslam::EventVector expected = edvs_driver::generateEvents(kSeed, kRate, kCount);

@@ -12,7 +12,7 @@
 #include <fstream>
 #include <mutex>
 
-#include "edvs_driver/conversions.h"
+#include "ebslam_msgs/event_conversions.h"
 #include "edvs_driver/device.h"
 #include "edvs_driver/emulator.h"
 #include "edvs_driver/stream_check.h"
@@ -25,7 +25,7 @@ class EventSink {
       : sub_(nh.subscribe(topic, 1000, &EventSink::callback, this)) {}
   void callback(const ebslam_msgs::EventArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    edvs_driver::appendFromMsg(*msg, events_);
+    ebslam_msgs::appendFromMsg(*msg, events_);
   }
   std::size_t size() {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -1,3 +1,4 @@
+// Event bags (bag_io.h) and the driver's parameter validation.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -5,7 +6,6 @@
 
 #include "ebslam/event_io.h"
 #include "edvs_driver/bag_io.h"
-#include "edvs_driver/conversions.h"
 #include "edvs_driver/emulator.h"
 #include "edvs_driver/ros_params.h"
 
@@ -25,31 +25,6 @@ ebslam::EventVector sampleEvents(std::int64_t offset_us) {
 }
 
 }  // namespace
-
-TEST(Conversions, TimeRoundTripIsExactInMicroseconds) {
-  for (std::int64_t t : {std::int64_t{0}, std::int64_t{1}, std::int64_t{999999},
-                         std::int64_t{1700000000123456}, std::int64_t{4294967295999999}}) {
-    EXPECT_EQ(edvs_driver::fromRosTime(edvs_driver::toRosTime(t)), t);
-  }
-  EXPECT_EQ(edvs_driver::toRosTime(1500000), ros::Time(1, 500000000));
-  EXPECT_THROW(edvs_driver::toRosTime(-1), std::invalid_argument);
-  EXPECT_THROW(edvs_driver::toRosTime(std::int64_t{4294967296} * 1000000), std::invalid_argument);
-}
-
-TEST(Conversions, EventArrayRoundTrip) {
-  const ebslam::EventVector events = sampleEvents(1700000000000000);
-  const auto msg = edvs_driver::toMsg(events, ebslam::SensorSize{128, 128}, "edvs_optical_frame");
-  EXPECT_EQ(msg.width, 128u);
-  EXPECT_EQ(msg.height, 128u);
-  EXPECT_EQ(msg.header.frame_id, "edvs_optical_frame");
-  EXPECT_EQ(msg.header.stamp, msg.events.back().ts);  // stamp = last event
-  ebslam::EventVector back;
-  const auto size = edvs_driver::appendFromMsg(msg, back);
-  EXPECT_EQ(back, events);
-  EXPECT_EQ(size.width, 128u);
-  const auto empty = edvs_driver::toMsg({}, ebslam::SensorSize{}, "f");
-  EXPECT_TRUE(empty.header.stamp.isZero());
-}
 
 TEST(BagIo, WriteReadRoundTripAndConvertThroughBinary) {
   const ebslam::EventVector events = sampleEvents(1000);
