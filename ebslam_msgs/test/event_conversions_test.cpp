@@ -25,9 +25,8 @@ ebslam::EventVector randomEvents(std::int64_t t0_us, std::size_t n, std::uint32_
 }
 
 TEST(EventConversions, TimeRoundTripIsExactInMicroseconds) {
-  for (const std::int64_t t :
-       {std::int64_t{0}, std::int64_t{1}, std::int64_t{999999}, std::int64_t{1700000000123456},
-        std::int64_t{4294967295999999}}) {
+  for (const std::int64_t t : {std::int64_t{0}, std::int64_t{1}, std::int64_t{999999},
+                               std::int64_t{1700000000123456}, std::int64_t{4294967295999999}}) {
     EXPECT_EQ(ebslam_msgs::toMicroseconds(ebslam_msgs::toRosTime(t)), t);
   }
   EXPECT_EQ(ebslam_msgs::toRosTime(1500001), ros::Time(1, 500001000));
@@ -64,14 +63,14 @@ TEST(EventConversions, EventArrayRoundTrip) {
   EXPECT_TRUE(ebslam_msgs::toMsg({}, ebslam::SensorSize{}, "f").header.stamp.isZero());
 }
 
-
 // A source's own clock -> EventClock -> messages -> back: what the event file player and the
 // simulator publish and a subscriber reads.
 TEST(EventConversions, SourceClockThroughMessagesRoundTrip) {
   const ebslam::EventVector events = randomEvents(123456789, 1000, 1);
   for (const double speed : {1.0, 2.0, 0.5}) {
     ebslam::EventClock clock(speed);
-    clock.anchor(events.front().t_us, ebslam_msgs::toMicroseconds(ros::Time(1700000000, 123456000)));
+    clock.anchor(events.front().t_us,
+                 ebslam_msgs::toMicroseconds(ros::Time(1700000000, 123456000)));
     ebslam::EventVector published = events;
     for (ebslam::Event& e : published) e.t_us = *clock.stamp(e.t_us);
     const auto msg = ebslam_msgs::toMsg(published, {128, 128}, "edvs_optical_frame");

@@ -214,9 +214,9 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
   std::unique_ptr<ebslam::EventFileReader> reader_;
   ebslam::EventVector pending_;
   std::size_t pending_index_ = 0;
-  ebslam::EventClock clock_;  // file time -> ROS time, anchored at the start of playback
-  std::size_t file_index_ = 0;             // index in the file of pending_[pending_index_]
-  std::optional<Held> held_;               // the event after a long step, until the next one
+  ebslam::EventClock clock_;    // file time -> ROS time, anchored at the start of playback
+  std::size_t file_index_ = 0;  // index in the file of pending_[pending_index_]
+  std::optional<Held> held_;    // the event after a long step, until the next one
   std::optional<std::int64_t> last_t_us_;  // file time of the last published event [us]
   std::int64_t last_stamp_us_ = 0;         // its stamp [us since the ROS epoch]
   std::size_t dropped_ = 0;                // events with damaged times

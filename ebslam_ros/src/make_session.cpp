@@ -35,9 +35,9 @@
 
 #include "ebslam/dedvs_scene.h"
 #include "ebslam/dedvs_simulator.h"
+#include "ebslam/event_clock.h"
 #include "ebslam/simulator_scenes.h"
 #include "ebslam/trajectory.h"
-#include "ebslam/event_clock.h"
 #include "ebslam_msgs/event_conversions.h"
 
 namespace {

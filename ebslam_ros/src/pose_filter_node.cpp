@@ -205,9 +205,10 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
       ++bad_input_seen_;
       // Not throttled: a restart is rare, and throttling on ROS time would hide every loop of
       // a bag after the first (the same stamps come back).
-      ROS_WARN("%s: event time jumped back by %.3f s (a looping bag or a sensor "
-               "reconnect?): filter restarted at the initial pose",
-               name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
+      ROS_WARN(
+          "%s: event time jumped back by %.3f s (a looping bag or a sensor "
+          "reconnect?): filter restarted at the initial pose",
+          name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
       backend_.reset();
       start_pose_ = config_.initial_pose;
     }

@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "ebslam_ros/ceiling_map_io.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/ceiling_map_io.h"
 
 namespace {
 

@@ -13,8 +13,8 @@
 #include <filesystem>
 #include <mutex>
 
-#include "edvs_driver/bag_io.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "edvs_driver/bag_io.h"
 #include "edvs_driver/device.h"
 #include "edvs_driver/emulator.h"
 

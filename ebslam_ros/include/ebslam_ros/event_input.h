@@ -1,8 +1,8 @@
 #pragma once
 // Checks an incoming EventArray before an event filter sees it (ROS-free apart from the message
 // type, so it is unit-tested without a master). Time convention: event time = the event's `ts`
-// as microseconds since the ROS epoch (ebslam_msgs/event_conversions.h), the stamp of every pose computed from
-// it.
+// as microseconds since the ROS epoch (ebslam_msgs/event_conversions.h), the stamp of every pose
+// computed from it.
 //
 // What it does with bad input, so that a filter never throws on it and nothing passes silently:
 //  - a message whose width x height differs from the sensor's: rejected whole (counted);

@@ -8,7 +8,8 @@
 // planar pose of the sensor's optical frame (x along pixel columns, y along rows, z = optical
 // axis pointing up to the ceiling); the mounting base_link -> sensor_frame turns it into
 // base_link's pose. The map frame's z = 0 is base_link's plane (the floor).
-// Time: every output is stamped with the time of the last event it includes (ebslam_msgs/event_conversions.h).
+// Time: every output is stamped with the time of the last event it includes
+// (ebslam_msgs/event_conversions.h).
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>

@@ -102,15 +102,27 @@ inline EventReadResult readEventsOrThrow(const std::string& path) {
 }
 
 /// Runs `filter` over the events in chunks of `every` events, recording the estimate after each
-/// chunk. Returns the processing time [s] (file I/O excluded).
+/// chunk; with message_us > 0 in chunks of event time instead, [k message_us, (k + 1) message_us)
+/// (what the ROS nodes receive from a source publishing every message_us, e.g. the event
+/// simulator node with ~publish_rate 1e6 / message_us). Returns the processing time [s] (file I/O
+/// excluded).
 template <typename Filter>
 double runFilter(Filter& filter, const EventVector& events, std::size_t every,
-                 Trajectory& trajectory) {
+                 Trajectory& trajectory, std::int64_t message_us = 0) {
   const auto start = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < events.size(); i += every) {
-    const std::size_t n = std::min(every, events.size() - i);
+  for (std::size_t i = 0; i < events.size();) {
+    std::size_t n = std::min(every, events.size() - i);
+    if (message_us > 0) {
+      // floor division: event times may be negative
+      const std::int64_t t = events[i].t_us;
+      const std::int64_t window = t / message_us - (t % message_us < 0 ? 1 : 0);
+      const std::int64_t end_us = (window + 1) * message_us;
+      n = 1;
+      while (i + n < events.size() && events[i + n].t_us < end_us) ++n;
+    }
     filter.process(events.data() + i, n);
     const double t = static_cast<double>(events[i + n - 1].t_us) * 1e-6;
+    i += n;
     if (!trajectory.empty() && t <= trajectory.back().t_s) continue;  // TUM needs rising times
     trajectory.push_back(toStampedPose(t, filter.estimate()));
   }

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   std::vector<double> map_origin{0.0, 0.0};
   std::vector<double> start{0.0, 0.0, 0.0};
   std::size_t every = 100;
+  std::int64_t message_us = 0;
   tools::CameraOptions camera_options;
   EbpfConfig config;
   app.add_option("events", events_path, "event file (binary, text or rpg)")
@@ -47,6 +48,10 @@ int main(int argc, char** argv) {
   app.add_option("--likelihood-png", likelihood_png, "write the cached sensor model as PNG");
   app.add_option("--every", every, "record the estimate every this many events")
       ->capture_default_str();
+  app.add_option("--message-us", message_us,
+                 "instead: process and record per window of this much event time [us], as the "
+                 "ROS nodes receive messages (10000 = 100 Hz)")
+      ->check(CLI::NonNegativeNumber);
   camera_options.add(app);
   tools::addFilterOptions(app, config.filter);
   CLI11_PARSE(app, argc, argv);
@@ -70,7 +75,7 @@ int main(int argc, char** argv) {
     const EventReadResult input = tools::readEventsOrThrow(events_path);
     EventParticleFilter filter(config, camera, std::move(likelihood), start_pose);
     Trajectory trajectory;
-    const double seconds = tools::runFilter(filter, input.events, every, trajectory);
+    const double seconds = tools::runFilter(filter, input.events, every, trajectory, message_us);
     std::printf("EB-PF: %zu events, N=%d B=%d K=%d, %.3f s, %.0f events/s\n", input.events.size(),
                 config.filter.num_particles, config.filter.batch_size, config.filter.resample_every,
                 seconds, input.events.size() / seconds);

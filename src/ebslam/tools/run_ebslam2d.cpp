@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   std::string start_from;
   std::vector<double> start{0.0, 0.0, 0.0};
   std::size_t every = 100;
+  std::int64_t message_us = 0;
   bool splat_all = false;
   tools::CameraOptions camera_options;
   Ebslam2dConfig config;
@@ -55,6 +56,10 @@ int main(int argc, char** argv) {
   app.add_option("--normalisation-png", normalisation_png, "final normalisation map Z as PNG");
   app.add_option("--every", every, "record the estimate every this many events")
       ->capture_default_str();
+  app.add_option("--message-us", message_us,
+                 "instead: process and record per window of this much event time [us], as the "
+                 "ROS nodes receive messages (10000 = 100 Hz)")
+      ->check(CLI::NonNegativeNumber);
   camera_options.add(app);
   tools::addFilterOptions(app, config.filter);
   CLI11_PARSE(app, argc, argv);
@@ -72,7 +77,7 @@ int main(int argc, char** argv) {
     const EventReadResult input = tools::readEventsOrThrow(events_path);
     EventSlam2d slam(config, camera, start_pose);
     Trajectory trajectory;
-    const double seconds = tools::runFilter(slam, input.events, every, trajectory);
+    const double seconds = tools::runFilter(slam, input.events, every, trajectory, message_us);
     std::printf("EB-SLAM-2D: %zu events, N=%d B=%d K=%d, %.3f s, %.0f events/s\n",
                 input.events.size(), config.filter.num_particles, config.filter.batch_size,
                 config.filter.resample_every, seconds, input.events.size() / seconds);

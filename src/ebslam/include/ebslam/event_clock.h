@@ -1,6 +1,7 @@
 #pragma once
 
-// The time convention of published events (ROS-free; the ROS side is ebslam_msgs/event_conversions.h).
+// The time convention of published events (ROS-free; the ROS side is
+// ebslam_msgs/event_conversions.h).
 //
 // A source of events has a clock of its own: the eDVS device clock unwrapped to 64 bit, the times
 // in an event file, the simulated time along a trajectory (all microseconds, Event::t_us). What
