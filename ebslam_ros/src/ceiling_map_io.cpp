@@ -1,5 +1,7 @@
 #include "ebslam_ros/ceiling_map_io.h"
 
+#include "ebslam_ros/flat_yaml.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -19,31 +21,8 @@ std::string trim(const std::string& s) {
   return s.substr(begin, end - begin + 1);
 }
 
-// The flat `key: value` yaml both layouts use (scalars and [a, b, c] lists; # comments).
-std::map<std::string, std::string> readFlatYaml(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open map yaml '" + path + "'");
-  std::map<std::string, std::string> values;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    line = trim(line);
-    if (line.empty()) continue;
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) {
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": not a 'key: value' line");
-    }
-    std::string value = trim(line.substr(colon + 1));
-    if (value.size() >= 2 && (value.front() == '"' || value.front() == '\'') &&
-        value.back() == value.front()) {
-      value = value.substr(1, value.size() - 2);
-    }
-    values[trim(line.substr(0, colon))] = value;
-  }
-  return values;
+std::map<std::string, std::string> readMapYaml(const std::string& path) {
+  return readFlatYaml(path, "map yaml");
 }
 
 const std::string& need(const std::map<std::string, std::string>& values, const std::string& key,
@@ -76,9 +55,7 @@ std::vector<double> numberList(const std::string& text, const std::string& key,
 }
 
 std::string resolve(const std::string& file, const std::string& yaml_path) {
-  if (!file.empty() && file.front() == '/') return file;
-  const auto slash = yaml_path.find_last_of('/');
-  return slash == std::string::npos ? file : yaml_path.substr(0, slash + 1) + file;
+  return resolveBesideYaml(file, yaml_path);
 }
 
 cv::Mat readImage(const std::string& path, const std::string& yaml_path) {
@@ -106,7 +83,7 @@ cv::Mat readImage(const std::string& path, const std::string& yaml_path) {
 }  // namespace
 
 CeilingEdgeMap loadCeilingMap(const std::string& yaml_path) {
-  const auto values = readFlatYaml(yaml_path);
+  const auto values = readMapYaml(yaml_path);
   CeilingEdgeMap map;
   if (values.count("edges") != 0) {  // ebslam_simulate_events layout
     const cv::Mat grey = readImage(resolve(need(values, "edges", yaml_path), yaml_path), yaml_path);

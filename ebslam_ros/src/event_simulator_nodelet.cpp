@@ -7,6 +7,11 @@
 //    the sensor's optical frame in ~map_frame at each message's end, and the tf
 //    ~map_frame -> ~ground_truth_frame (its own frame, so it never fights the estimators' tf);
 //  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+// Scene and motion from ~scenario (default: the demo's, in the repository) and the parameters.
+// With ~loop the robot drives ~t_begin..~t_end forth and back endlessly: pass k runs backwards
+// along the path when k is odd (the pose stays continuous) with event seed ~seed + k, and the
+// simulated time runs on (pass k covers [k D, (k + 1) D) after the start, D = ~t_end - ~t_begin),
+// so stamps and /clock never jump back.
 // Time: a simulated time t [s since the trajectory's start] is stamped anchor + t, the anchor
 // being ~clock_start with /clock, else the wall time at the start (then stamps advance with
 // t / ~speed, as the event file player). Pacing: the message for t is sent at
@@ -52,10 +57,10 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
-    const std::string default_trajectory =
-        package.empty() ? "" : package + "/../test/data/sample_session/pioneer_360_excerpt.txt";
+    const std::string default_scenario =
+        package.empty() ? "" : package + "/../test/data/sample_session/pioneer_360_excerpt.yaml";
     try {
-      config_ = loadEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
+      config_ = loadEventSimulatorNodeConfig(getPrivateNodeHandle(), default_scenario);
       prepare();
     } catch (const std::exception& error) {
       NODELET_ERROR("event simulator not started: %s", error.what());
@@ -66,9 +71,12 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
     path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
     if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
-    NODELET_INFO("simulating '%s' from %.2f to %.2f s at %.2fx%s", config_.trajectory.c_str(),
+    NODELET_INFO("simulating '%s'%s%s from %.2f to %.2f s at %.2fx%s%s", config_.trajectory.c_str(),
+                 config_.scenario.empty() ? "" : " (scenario ",
+                 config_.scenario.empty() ? "" : (config_.scenario + ")").c_str(),
                  t_begin_ - path_.front().t_s, t_end_ - path_.front().t_s, config_.speed,
-                 config_.publish_clock ? " with /clock" : "");
+                 config_.publish_clock ? " with /clock" : "",
+                 config_.loop ? ", looping forth and back" : "");
     worker_ = std::thread([this] { run(); });
   }
 
@@ -105,7 +113,18 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
       scene_ = ebslam::makeCeilingScene(texture, region, config_.metres_per_texel,
                                         config_.ceiling_height_m);
     }
-    simulator_ = std::make_unique<ebslam::EventSimulator>(config_.simulator);
+    // The path driven backwards over the same span: pose at t' = t_begin + t_end - t.
+    reversed_path_.assign(path_.rbegin(), path_.rend());
+    for (ebslam::StampedPose& pose : reversed_path_) pose.t_s = t_begin_ + t_end_ - pose.t_s;
+    ebslam::EventSimulator check(config_.simulator);  // validates the configuration
+  }
+
+  // The path of pass `pass` (forth, back, forth, ...), shifted to start at its pass's time.
+  ebslam::Trajectory passPath(int pass) const {
+    ebslam::Trajectory path = pass % 2 == 0 ? path_ : reversed_path_;
+    const double offset = pass * (t_end_ - t_begin_);
+    for (ebslam::StampedPose& pose : path) pose.t_s += offset;
+    return path;
   }
 
   void run() {
@@ -127,18 +146,33 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     const ebslam::SensorSize sensor{static_cast<std::uint32_t>(config_.simulator.camera.width),
                                     static_cast<std::uint32_t>(config_.simulator.camera.height)};
     try {
-      const ebslam::SimulationResult result = simulator_->simulate(
-          scene_, path_, t_begin_, t_end_, [&](const ebslam::EventVector& events) {
-            if (stop_) throw Stopped{};
-            for (const ebslam::Event& e : events) {
-              while (e.t_us >= next_boundary_us_) flush(sensor);
-              pending_.push_back(e);
-            }
-          });
+      std::size_t signal = 0, noise = 0;
+      for (int pass = 0;; ++pass) {
+        pass_path_ = passPath(pass);
+        const double offset = pass * (t_end_ - t_begin_);
+        pass_end_ = t_end_ + offset;
+        ebslam::SimulatorConfig config = config_.simulator;
+        config.events.seed += static_cast<std::uint64_t>(pass);
+        const ebslam::SimulationResult result = ebslam::EventSimulator(config).simulate(
+            scene_, pass_path_, t_begin_ + offset, pass_end_,
+            [&](const ebslam::EventVector& events) {
+              if (stop_) throw Stopped{};
+              for (const ebslam::Event& e : events) {
+                while (e.t_us >= next_boundary_us_) flush(sensor);
+                pending_.push_back(e);
+              }
+            });
+        signal += result.signal_events;
+        noise += result.noise_events;
+        if (!config_.loop) break;
+        if (pass % 10 == 9) {
+          NODELET_INFO("simulated %d passes: %zu events in %u messages", pass + 1, signal + noise,
+                       sequence_);
+        }
+      }
       flush(sensor);
       NODELET_INFO("simulation done: %zu events (%zu signal, %zu noise) in %u messages",
-                   result.signal_events + result.noise_events, result.signal_events,
-                   result.noise_events, sequence_);
+                   signal + noise, signal, noise, sequence_);
     } catch (const Stopped&) {
     } catch (const std::exception& error) {
       NODELET_ERROR("simulation failed: %s", error.what());
@@ -168,7 +202,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
       events_pub_.publish(msg);
       pending_.clear();
     }
-    publishGroundTruth(std::min(t_end_s, t_end_), stamp_end);
+    publishGroundTruth(std::min(t_end_s, pass_end_), stamp_end);
   }
 
   void publishClock(const ros::Time& time) {
@@ -178,7 +212,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void publishGroundTruth(double t_s, const ros::Time& stamp) {
-    const ebslam::StampedPose pose = ebslam::interpolatePose(path_, t_s);
+    const ebslam::StampedPose pose = ebslam::interpolatePose(pass_path_, t_s);
     geometry_msgs::PoseStamped msg;
     msg.header.stamp = stamp;
     msg.header.frame_id = config_.map_frame;
@@ -213,8 +247,10 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   EventSimulatorNodeConfig config_;
   ebslam::Trajectory path_;
   ebslam::Scene scene_;
-  std::unique_ptr<ebslam::EventSimulator> simulator_;
+  ebslam::Trajectory reversed_path_;  // path_ driven backwards over [t_begin_, t_end_]
+  ebslam::Trajectory pass_path_;      // the path of the pass being simulated
   double t_begin_ = 0.0, t_end_ = 0.0;
+  double pass_end_ = 0.0;     // end of the pass being simulated [s, trajectory clock]
   ebslam::EventClock clock_;  // simulated time -> ROS time
   ros::WallTime wall_start_;
   std::int64_t next_boundary_us_ = 0;
