@@ -10,6 +10,7 @@
 // Prints one result line per quantity.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ebslam_msgs/EventArray.h>
+#include <ebslam_msgs/event_conversions.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <ros/ros.h>
 #include <CLI/CLI.hpp>
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
   // Event k is due at start + k / rate; its pixel is event k mod n of the file.
   const std::size_t n = input.events.size();
   const ros::Time start = ros::Time::now() + ros::Duration(0.05);
+  const std::int64_t start_us = ebslam_msgs::toMicroseconds(start);
   const std::size_t total = static_cast<std::size_t>(rate * duration);
   const ros::WallDuration period(1.0 / message_rate);
   std::size_t sent = 0, messages = 0;
@@ -89,21 +91,14 @@ int main(int argc, char** argv) {
     const std::size_t due =
         std::min(total, static_cast<std::size_t>(std::max(0.0, elapsed * rate)));
     if (due <= sent) continue;
-    ebslam_msgs::EventArray msg;
-    msg.header.frame_id = "edvs_optical_frame";
-    msg.width = input.sensor.width;
-    msg.height = input.sensor.height;
-    msg.events.resize(due - sent);
+    // Event k at start + k / rate on the published clock (microseconds since the ROS epoch).
+    ebslam::EventVector events(due - sent);
     for (std::size_t k = sent; k < due; ++k) {
-      const ebslam::Event& e = input.events[k % n];
-      ebslam_msgs::Event& out = msg.events[k - sent];
-      out.x = e.x;
-      out.y = e.y;
-      out.polarity = e.polarity;
-      out.ts = start + ros::Duration(static_cast<double>(k) / rate);
+      events[k - sent] = input.events[k % n];
+      events[k - sent].t_us =
+          start_us + static_cast<std::int64_t>(static_cast<double>(k) * 1e6 / rate);
     }
-    msg.header.stamp = msg.events.back().ts;
-    pub.publish(msg);
+    pub.publish(ebslam_msgs::toMsg(events, input.sensor, "edvs_optical_frame"));
     sent = due;
     ++messages;
   }

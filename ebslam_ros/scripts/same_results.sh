@@ -47,13 +47,13 @@ oy=$(sed -n 's/^origin_y_m: *//p' ceiling.yaml)
 port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI=http://localhost:${port}
 for filter in ${FILTERS:-slam ebpf}; do
-  rm -f "${filter}.bag"
+  rm -f "${filter}.bag" "${filter}_launch.log"
   roslaunch -p "${port}" ebslam_ros simulated_localisation.launch filter:="${filter}" speed:="${speed}" \
     seed:="${seed}" trajectory:="${trajectory}" initial_pose:="[${start// /, }]" map:="${out}/ceiling.yaml" \
     bag:="${out}/${filter}.bag" >"${filter}_launch.log" 2>&1 &
   launch=$!
   start_wall=${SECONDS}
-  until grep -q "simulation done" "${filter}_launch.log"; do
+  until grep -q "simulation done" "${filter}_launch.log" 2>/dev/null; do
     sleep 1
     if ! kill -0 "${launch}" 2>/dev/null; then echo "roslaunch ended early: ${filter}_launch.log"; exit 1; fi
   done
