@@ -20,6 +20,16 @@ def classify(case):
     return "passed"
 
 
+def failure_reason(case):
+    """The first lines of a failed case's message, so that a log's tail says why."""
+    for tag in ("failure", "error"):
+        element = case.find(tag)
+        if element is not None:
+            text = (element.get("message") or element.text or "").strip()
+            return " | ".join(line.strip() for line in text.splitlines()[:3] if line.strip())[:400]
+    return ""
+
+
 def detail_failed(path):
     try:
         return any(classify(c) == "failed" for c in ET.parse(path).getroot().iter("testcase"))
@@ -52,7 +62,9 @@ def main(folder):
                         continue
                 counts[kind] += 1
                 if kind == "failed":
-                    failures.append(f"{os.path.relpath(path, folder)}: {case.get('classname')}.{case.get('name')}")
+                    reason = failure_reason(case)
+                    failures.append(f"{os.path.relpath(path, folder)}: {case.get('classname')}.{case.get('name')}"
+                                    + (f": {reason}" if reason else ""))
     for line in failures:
         print(f"FAILED {line}")
     total = sum(counts.values())
