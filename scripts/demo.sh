@@ -5,7 +5,9 @@
 #     and score both trajectories against the ground truth.
 #  2. Part I offline: DASP superpixels of every sample RGB-D frame (labels, overlay, list).
 #  3. ROS: an emulated eDVS on a pseudo-terminal streams the simulated events to the eDVS driver
-#     nodelet while the RGB-D source plays the sample frames; rosbag records all topics.
+#     nodelet while the RGB-D source plays the sample frames; rosbag records all topics. The
+#     emulator starts once the recorder is connected to the driver's events, so the bag holds the
+#     stream from its first event (the summary checks it).
 # Outputs go to demo_output/; the summary is printed and written to demo_output/summary.txt.
 set -eo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -116,19 +118,30 @@ export ROS_LOG_DIR="${out}/logs"
 link="/tmp/edvs_demo_$$"
 events_file="${e2d}/events.bin"
 [ -f "${events_file}" ] || events_file="${repo}/ebslam_ros/test/data/events.txt"
-rosrun edvs_driver edvs_emulator --link "${link}" --file "${events_file}" --baud 4000000 --duration 60 >"${out}/logs/emulator.log" 2>&1 &
-emulator_pid=$!
-trap 'kill ${emulator_pid} 2>/dev/null || true' EXIT
-for _ in $(seq 50); do [ -e "${link}" ] && break; sleep 0.1; done
-if roslaunch -p "${port}" "${repo}/launch/demo.launch" output_dir:="${out}" \
-  edvs_uri:="serial://${link}?format=E2" >"${out}/roslaunch.log" 2>&1; then
-  /usr/bin/python3 "${repo}/scripts/demo_summary.py" "${out}" >"${out}/summary_ros.txt" || status=1
+# The launch starts the recorder, the RGB-D source (it waits for its subscribers) and the driver,
+# which retries opening the link until the emulator has made it. The emulator starts streaming
+# when the driver opens it, so it starts only once the recorder is connected to edvs/events.
+roslaunch -p "${port}" "${repo}/launch/demo.launch" output_dir:="${out}" \
+  edvs_uri:="serial://${link}?format=E2" </dev/null >"${out}/roslaunch.log" 2>&1 &
+launch_pid=$!
+emulator_pid=""
+trap 'kill ${launch_pid} ${emulator_pid} 2>/dev/null || true' EXIT
+if /usr/bin/python3 "${repo}/scripts/wait_for_connection.py" /recorder /edvs/events 60; then
+  rosrun edvs_driver edvs_emulator --link "${link}" --file "${events_file}" --baud 4000000 --duration 60 >"${out}/logs/emulator.log" 2>&1 &
+  emulator_pid=$!
+else
+  status=1
+fi
+if wait "${launch_pid}"; then
+  ebslam_event_convert "${events_file}" "${out}/logs/emulated_events.txt" --to text >/dev/null 2>&1 || true
+  /usr/bin/python3 "${repo}/scripts/demo_summary.py" "${out}" "${out}/logs/emulated_events.txt" \
+    >"${out}/summary_ros.txt" || status=1
 else
   echo "demo: roslaunch failed, see demo_output/roslaunch.log" >&2
   tail -n 20 "${out}/roslaunch.log" >&2
   status=1
 fi
-kill "${emulator_pid}" 2>/dev/null || true
+[ -n "${emulator_pid}" ] && kill "${emulator_pid}" 2>/dev/null || true
 
 {
   echo "demo summary (outputs in demo_output/)"

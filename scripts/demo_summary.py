@@ -2,7 +2,8 @@
 """Summarises the demo's recording: what each node produced, checked for frames and stamps.
 
 Writes the first colour and depth frame as PNG next to the bag and prints one line per topic.
-Exits 1 when a stream the demo is meant to produce is missing.
+Exits 1 when a stream the demo is meant to produce is missing, or, given the text event file the
+emulated eDVS streamed (second argument), when the bag does not start with its first events.
 """
 import os
 import sys
@@ -32,8 +33,32 @@ def save_png(path, msg):
         plt.imsave(path, data.reshape(msg.height, msg.width), cmap="viridis")
 
 
-def main(out):
+def read_text_events(path, limit):
+    """(x, y) of the first `limit` events of a text event file (t x y p lines, # comments)."""
+    events = []
+    with open(path) as f:
+        for line in f:
+            fields = line.split()
+            if not fields or fields[0].startswith("#"):
+                continue
+            events.append((int(fields[1]), int(fields[2])))
+            if len(events) == limit:
+                break
+    return events
+
+
+def first_recorded_index(streamed, recorded):
+    """Index in `streamed` of the first recorded event (None if the recording matches nowhere)."""
+    n = min(len(recorded), 20)
+    for i in range(len(streamed) - n + 1):
+        if streamed[i:i + n] == recorded[:n]:
+            return i
+    return None
+
+
+def main(out, streamed_path=None):
     bag_path = os.path.join(out, "demo.bag")
+    recorded_xy = []
     stats = {}
     events = 0
     first_event = last_event = None
@@ -54,6 +79,8 @@ def main(out):
             s["last"] = stamp
             if topic == "/edvs/events":
                 events += len(msg.events)
+                if len(recorded_xy) < 20:
+                    recorded_xy += [(e.x, e.y) for e in msg.events[:20 - len(recorded_xy)]]
                 if msg.events:
                     first_event = first_event or msg.events[0].ts.to_sec()
                     last_event = msg.events[-1].ts.to_sec()
@@ -82,8 +109,20 @@ def main(out):
         keep = ["events published", "dropped bytes", "reconnects"]
         extra = ", ".join(f"{k} {values[k]}" for k in keep if k in values)
         print(f"  eDVS diagnostics: {diagnostics.message}" + (f" ({extra})" if extra else ""))
+    if streamed_path and events:
+        if not os.path.isfile(streamed_path):
+            print(f"  first events: cannot check, {streamed_path} is missing")
+            ok = False
+        else:
+            index = first_recorded_index(read_text_events(streamed_path, 200000), recorded_xy)
+            if index == 0:
+                print("  first events: the bag starts with the first event the eDVS streamed")
+            else:
+                where = "nowhere in the stream" if index is None else f"at streamed event {index}"
+                print(f"  first events: MISSING, the bag starts {where}")
+                ok = False
     return 0 if ok else 1
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1]))
+    sys.exit(main(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else None))
