@@ -98,6 +98,7 @@ PoseFilterNode::PoseFilterNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
     static_broadcaster_.sendTransform(
         toTransformMsg(mount, ros::Time(0), config_.base_frame, config_.sensor_frame));
   }
+  makeDenoiser();
   pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   path_pub_ = nh_.advertise<nav_msgs::Path>("path", 1, true);
   particles_pub_ = nh_.advertise<geometry_msgs::PoseArray>("particles", 1);
@@ -112,6 +113,10 @@ PoseFilterNode::PoseFilterNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   start.reset_scores_on_resample = knobs_.reset_scores_on_resample;
   start.g0 = knobs_.g0;
   start.diffusion_scale = knobs_.diffusion_scale;
+  start.denoise = config_.denoise;
+  start.denoise_window = 1e-6 * static_cast<double>(config_.denoiser.window_us);
+  start.denoise_min_support = config_.denoiser.min_support;
+  start.denoise_polarity_match = config_.denoiser.polarity_match;
   reconfigure_->updateConfig(start);
   reconfigure_->setCallback(
       [this](EventFilterKnobsConfig& k, std::uint32_t level) { onReconfigure(k, level); });
@@ -144,6 +149,11 @@ bool PoseFilterNode::resolveMount() {
                        config_.base_frame.c_str(), config_.sensor_frame.c_str(), error.what());
   }
   return false;
+}
+
+void PoseFilterNode::makeDenoiser() {
+  denoiser_.reset();
+  if (config_.denoise) denoiser_.emplace(config_.denoiser, guard_.sensor());
 }
 
 void PoseFilterNode::restart(const ebslam::Pose2& base_pose) {
@@ -211,6 +221,21 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
           name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
       backend_.reset();
       start_pose_ = config_.initial_pose;
+      if (denoiser_) denoiser_->reset();
+    }
+    if (denoiser_) {
+      const std::size_t before = segment.events.size();
+      try {
+        denoiser_->filterInPlace(segment.events);
+      } catch (const std::invalid_argument& error) {
+        // The guard makes the events valid for the filter; reaching this is a defect.
+        ++filter_errors_;
+        ROS_ERROR_THROTTLE(kWarnPeriodS, "%s: denoiser rejected %zu events: %s", name_.c_str(),
+                           before, error.what());
+        continue;
+      }
+      denoiser_passed_ += segment.events.size();
+      denoiser_removed_ += before - segment.events.size();
     }
     if (!backend_) restart(start_pose_);
     const std::size_t chunk = static_cast<std::size_t>(config_.max_events_per_update);
@@ -337,6 +362,7 @@ bool PoseFilterNode::onReset(ebslam_msgs::ResetPose::Request& request,
   backend_.reset();  // restarts with the next events
   path_.clear();
   guard_.restart();
+  if (denoiser_) denoiser_->reset();
   response.success = true;
   response.message = "filter restarts at (" + std::to_string(start_pose_.x) + ", " +
                      std::to_string(start_pose_.y) + ", " + std::to_string(start_pose_.theta) +
@@ -354,10 +380,22 @@ void PoseFilterNode::onReconfigure(EventFilterKnobsConfig& k, std::uint32_t) {
   next.reset_scores_on_resample = k.reset_scores_on_resample;
   next.g0 = k.g0;
   next.diffusion_scale = k.diffusion_scale;
+  ebslam::BackgroundActivityFilterConfig denoiser = config_.denoiser;
+  denoiser.window_us = std::max<std::int64_t>(1, std::llround(k.denoise_window * 1e6));
+  denoiser.min_support = k.denoise_min_support;
+  denoiser.polarity_match = k.denoise_polarity_match;
   try {
     next.validate();
+    denoiser.validate();
     if (backend_) backend_->setFilterConfig(next);
     knobs_ = next;
+    if (k.denoise != config_.denoise || denoiser.window_us != config_.denoiser.window_us ||
+        denoiser.min_support != config_.denoiser.min_support ||
+        denoiser.polarity_match != config_.denoiser.polarity_match) {
+      config_.denoise = k.denoise;
+      config_.denoiser = denoiser;
+      makeDenoiser();
+    }
   } catch (const std::invalid_argument& error) {
     ROS_ERROR("%s: reconfiguration rejected: %s", name_.c_str(), error.what());
   }
@@ -388,6 +426,9 @@ void PoseFilterNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& statu
   status.add("events outside the sensor", outside_);
   status.add("events clamped in time", clamped_);
   status.add("restarts after time jumps", restarts_);
+  status.add("denoiser", config_.denoise ? "on" : "off");
+  status.add("events passed by the denoiser", denoiser_passed_);
+  status.add("events removed by the denoiser", denoiser_removed_);
   status.add("pauses longer than gap_warning", gaps_);
   status.add("processing time [s]", processing_s_);
   status.add("events per second of processing",

@@ -306,6 +306,86 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   EXPECT_EQ(values["pauses longer than gap_warning"], "1");
 }
 
+// ~denoise (event_particle_filter_denoise.test): the background-activity filter runs inside the
+// node. Isolated noise events (no neighbouring edge pixel, far from each other) are removed, the
+// edge events pass, and the pose stays right.
+TEST_F(PoseFilterTest, DenoiserInsideTheNodeRemovesIsolatedNoise) {
+  bool denoise = false;
+  ros::param::get("~denoise_test", denoise);
+  if (!denoise) GTEST_SKIP() << "only in event_particle_filter_denoise.test";
+  std::vector<std::vector<bool>> edge(128, std::vector<bool>(128, false));
+  for (const auto& [u, v] : pixels_) edge[v][u] = true;
+  std::vector<std::pair<int, int>> quiet;  // no edge pixel in their 3 x 3 neighbourhood
+  for (int v = 2; v < 126; v += 5) {
+    for (int u = 2; u < 126; u += 5) {
+      bool near = false;
+      for (int dv = -1; dv <= 1; ++dv) {
+        for (int du = -1; du <= 1; ++du) near = near || edge[v + dv][u + du];
+      }
+      if (!near) quiet.emplace_back(u, v);
+    }
+  }
+  ASSERT_GT(quiet.size(), 100u);
+  diagnostic_msgs::DiagnosticArray diagnostics;
+  auto diag_sub = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10,
+      [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics = *m; });
+  const auto value = [&](const std::string& key) -> std::uint64_t {
+    for (const auto& kv : diagnostics.status.at(0).values) {
+      if (kv.key == key) return std::stoull(kv.value);
+    }
+    ADD_FAILURE() << "no diagnostics value '" << key << "'";
+    return 0;
+  };
+  std::int64_t t = feed(g_next_t, 5);  // warm-up: every edge pixel has fired
+  diagnostics.status.clear();
+  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  const std::uint64_t removed0 = value("events removed by the denoiser");
+  const std::uint64_t passed0 = value("events passed by the denoiser");
+  std::size_t noise = 0, signal = 0;
+  for (int k = 0; k < 10; ++k) {
+    ebslam_msgs::EventArray msg = makeEvents(t, 2000, 5);
+    signal += msg.events.size();
+    // Noise every 20 events: one of the quiet pixels, at the time of the event it follows.
+    std::vector<ebslam_msgs::Event> extra;
+    for (std::size_t i = 0; i < 2000; i += 20) {
+      ebslam_msgs::Event e = msg.events[i];
+      const auto& q = quiet[(noise * 37) % quiet.size()];
+      e.x = static_cast<std::uint16_t>(q.first);
+      e.y = static_cast<std::uint16_t>(q.second);
+      extra.push_back(e);
+      ++noise;
+    }
+    msg.events.insert(msg.events.end(), extra.begin(), extra.end());
+    std::stable_sort(msg.events.begin(), msg.events.end(),
+                     [](const auto& a, const auto& b) { return a.ts < b.ts; });
+    // The pose carries the last event that passed the denoiser.
+    events_pub_.publish(msg);
+    const ros::Time first = msg.events.front().ts;
+    ASSERT_TRUE(
+        waitFor([&] { return !poses_.empty() && poses_.back().header.stamp >= first; }, 5.0))
+        << "no pose for message " << k;
+    EXPECT_LE(poses_.back().header.stamp, msg.header.stamp);
+    t += 10000;
+  }
+  g_next_t = std::max(g_next_t, t);
+  expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
+  // Counters as of the next diagnostics update.
+  ros::WallDuration(1.1).sleep();
+  diagnostics.status.clear();
+  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  for (const auto& kv : diagnostics.status.at(0).values) {
+    if (kv.key == "denoiser") {
+      EXPECT_EQ(kv.value, "on");
+    }
+  }
+  const std::uint64_t removed = value("events removed by the denoiser") - removed0;
+  const std::uint64_t passed = value("events passed by the denoiser") - passed0;
+  EXPECT_EQ(removed + passed, noise + signal);
+  EXPECT_GE(removed, noise);                // every noise event
+  EXPECT_LE(removed, noise + signal / 50);  // and at most 2 % of the edge events
+}
+
 TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   bool slam = false;
   ros::param::get("~slam", slam);

@@ -24,6 +24,7 @@
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <ebslam/ebpf.h>
+#include <ebslam/event_denoiser.h>
 #include <ebslam/particles2d.h>
 
 #include <cstdint>
@@ -92,6 +93,9 @@ class PoseFilterNode {
   bool resolveMount();
   void restart(const ebslam::Pose2& base_pose);
   void publish(const ros::Time& stamp);
+  /// (Re)creates or removes the denoiser after config_.denoise / config_.denoiser (forgets the
+  /// activity).
+  void makeDenoiser();
 
   PoseFilterNodeConfig config_;
   ebslam::EventFilterConfig knobs_;
@@ -105,6 +109,8 @@ class PoseFilterNode {
   ebslam::Pose2 start_pose_;  // base_link in map at the next (re)start
   std::optional<ebslam::Pose2> mount_;
   EventInputGuard guard_;
+  /// ~denoise: the background-activity filter between the guard and the pose filter.
+  std::optional<ebslam::BackgroundActivityFilter> denoiser_;
 
   ros::Subscriber events_sub_;
   ros::Publisher pose_pub_, path_pub_, particles_pub_;
@@ -124,7 +130,8 @@ class PoseFilterNode {
   // Counters for diagnostics (since start).
   std::uint64_t messages_ = 0, events_in_ = 0, empty_messages_ = 0, rejected_size_ = 0,
                 rejected_frame_ = 0, outside_ = 0, clamped_ = 0, restarts_ = 0, gaps_ = 0,
-                dropped_messages_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0;
+                dropped_messages_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0,
+                denoiser_passed_ = 0, denoiser_removed_ = 0;
   std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
   std::optional<std::uint32_t> last_seq_;
   double processing_s_ = 0.0;

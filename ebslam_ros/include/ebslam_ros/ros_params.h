@@ -14,6 +14,7 @@
 #include <ebslam/ebpf.h>
 #include <ebslam/ebslam2d.h>
 #include <ebslam/event.h>
+#include <ebslam/event_denoiser.h>
 #include <ebslam/event_io.h>
 #include <ebslam/particles2d.h>
 #include <ebslam/simulator.h>
@@ -68,6 +69,10 @@ struct PoseFilterNodeConfig {
   double gap_warning_s = 1.0;     ///< ~gap_warning: warn about pauses in the stream longer [s]
   /// ~max_events_per_update: events per filter call and pose (a huge message gives several).
   int max_events_per_update = 200000;
+  /// ~denoise: run the background-activity filter on the events before the pose filter (no
+  /// topic hop); its parameters under ~denoiser/ (loadBackgroundActivityFilterConfig).
+  bool denoise = false;
+  ebslam::BackgroundActivityFilterConfig denoiser;
 };
 
 /// Common filter knobs (~num_particles, ~batch_size, ~resample_every, ~beta, ~g0,
@@ -93,6 +98,22 @@ struct EventSlam2dNodeConfig {
   double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
+
+/// Background-activity filter (ebslam/event_denoiser.h) from `nh`: ~window [s] 0.1,
+/// ~min_support 3, ~polarity_match true, ~refractory_filter false, ~refractory_period [s] 0.001
+/// (the core defaults). Times are rounded to microseconds.
+ebslam::BackgroundActivityFilterConfig loadBackgroundActivityFilterConfig(
+    const ros::NodeHandle& nh);
+
+/// The EventDenoiser nodelet.
+struct EventDenoiserNodeConfig {
+  ebslam::BackgroundActivityFilterConfig filter;
+  int queue_size = 1000;  ///< ~queue_size: EventArray messages queued
+  /// ~max_backward: events earlier than their predecessor by up to this are filtered at the
+  /// predecessor's time (jitter); earlier by more, the stream restarted: the filter forgets [s]
+  double max_backward_s = 0.001;
+};
+EventDenoiserNodeConfig loadEventDenoiserNodeConfig(const ros::NodeHandle& private_nh);
 
 /// Event image renderer (EventRenderer).
 struct EventRendererConfig {
