@@ -6,6 +6,9 @@
 # on and off, 10 seeds, into RUNS_DIR/noise), the speed benchmark (ebslam_ebpf_bench) and writes
 # the report. About 10-15 min on a loaded 2-core machine for the first part; the noise runs take
 # about 25 min of CPU (runs that diverge are the slowest), several times that on a loaded machine.
+# The 3 Hz rows now on the page came from a shorter run merged into the page's section:
+#   ebslam_experiment_events2d --data <shared>/data --out <dir>/r3 --noise-only --noise-rates 3 --noise-seeds 5
+#   scripts/events2d_report.py <dir> --noise-section-only   (<dir>/*/noise_runs.csv, denoise.csv)
 #   scripts/events2d_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"

@@ -89,10 +89,11 @@ def read_csvs(paths):
     return rows
 
 
-def noise_section(runs_dir, base_rows, bench_path, out_dir=None):
+def noise_section(runs_dir, base_rows, bench_path, out_dir=None, kept_speed=None):
     """Markdown of the background-activity section from <runs_dir>[/*]/noise_runs.csv and
     denoise.csv (merged copies go to out_dir); base_rows: runs.csv rows of the default noise
-    (0.1 Hz) for the filter-off row."""
+    (0.1 Hz) for the filter-off row; kept_speed: lines of an earlier filter-speed table, used when
+    bench_path has none."""
     noise_rows = read_csvs(sorted(glob.glob(os.path.join(runs_dir, "noise_runs.csv")) +
                                   glob.glob(os.path.join(runs_dir, "*", "noise_runs.csv"))))
     den_rows = read_csvs(sorted(glob.glob(os.path.join(runs_dir, "denoise.csv")) +
@@ -187,7 +188,9 @@ def noise_section(runs_dir, base_rows, bench_path, out_dir=None):
            "Position RMSE (EB-PF direct, EB-SLAM-2D aligned, as above) and divergences (RMSE > "
            "30 cm); EB-SLAM-2D's RMSE over the runs that did not diverge, with the worst run in "
            "brackets. The 0.1 Hz rows are the runs of the tables above (3 seeds). Runs per cell: "
-           "seeds completed by the sweep.", "",
+           "seeds completed by the sweep (highest seed: " + ", ".join(
+               f"{max(int(r['seed']) for r in noise_rows if float(r['noise_rate']) == x)} at "
+               f"{x:g} Hz" for x in rates) + ").", "",
            "| trajectory | noise [Hz/pixel] | variant | EB-PF runs | EB-PF RMSE | EB-PF diverged | "
            "EB-SLAM-2D runs | EB-SLAM-2D RMSE (worst) | EB-SLAM-2D diverged |",
            "|---|---|---|---|---|---|---|---|---|"]
@@ -242,6 +245,8 @@ def noise_section(runs_dir, base_rows, bench_path, out_dir=None):
             if pf:
                 md.append(f"| BM_Ebpf/B:3/N:50 | {pf:.1f} | |")
             md.append("")
+    elif kept_speed:
+        md += kept_speed
     md.append(NOISE_END)
     return md
 
@@ -262,8 +267,13 @@ def main():
         page_path = os.path.join(a.out, "events2d.md")
         page = open(page_path).read()
         base = list(csv.DictReader(open(os.path.join(a.out, "events2d", "runs.csv"))))
+        kept_speed = None
+        if NOISE_BEGIN in page and "### Filter speed" in page.split(NOISE_BEGIN, 1)[1]:
+            old_section = page.split(NOISE_BEGIN, 1)[1].split(NOISE_END, 1)[0]
+            kept_speed = ("### Filter speed" + old_section.split("### Filter speed", 1)[1]).split(
+                "\n")[:-1]
         section = "\n".join(noise_section(a.runs_dir, base, a.noise_bench or a.bench,
-                                           os.path.join(a.out, "events2d")))
+                                           os.path.join(a.out, "events2d"), kept_speed))
         if NOISE_BEGIN in page:
             head, rest = page.split(NOISE_BEGIN, 1)
             tail = rest.split(NOISE_END, 1)[1]
