@@ -1,8 +1,9 @@
 #pragma once
 // The ROS side shared by the EventParticleFilter and EventSlam2d nodelets (not a nodelet
-// itself): input checks (EventInputGuard), the filter's life cycle (lazy start once the sensor
-// mounting is known, reset on a jump back in time or by the `reset` service), and the outputs
-// pose, path, particles, tf, diagnostics and the dynamic_reconfigure knobs.
+// itself): input checks (EventInputGuard), the optional background-activity filter (~denoise),
+// the filter's life cycle (lazy start once the sensor mounting is known, reset on a jump back
+// in time or by the `reset` service), and the outputs pose, path, particles, tf, diagnostics and
+// the dynamic_reconfigure knobs.
 //
 // Frames (REP 105): map -> odom -> base_link -> sensor_frame. The core filters estimate the
 // planar pose of the sensor's optical frame (x along pixel columns, y along rows, z = optical
