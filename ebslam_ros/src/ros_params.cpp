@@ -2,6 +2,8 @@
 
 #include "ebslam_ros/flat_yaml.h"
 
+#include <ebslam/dedvs_io.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -422,6 +424,101 @@ EventFilePlayerConfig loadEventFilePlayerConfig(const ros::NodeHandle& nh) {
   requirePositive(config.speed, nh, "speed");
   requirePositive(config.max_gap_s, nh, "max_gap");
   return config;
+}
+
+DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle& nh) {
+  DepthEventFusionNodeConfig c;
+  c.calibration = param<std::string>(nh, "calibration", c.calibration);
+  if (c.calibration.empty()) {
+    fail(nh, "calibration", "is not set (a D-eDVS sensors yaml, format in ebslam/dedvs_io.h)");
+  }
+  try {
+    c.sensors = ebslam::readDedvsSensors(c.calibration);
+  } catch (const std::exception& error) {
+    fail(nh, "calibration", "= '" + c.calibration + "' is unusable: " + error.what());
+  }
+  ebslam::DepthFusionConfig& f = c.fusion;
+  f.min_depth_m = param<double>(nh, "min_depth", f.min_depth_m);
+  f.max_depth_m = param<double>(nh, "max_depth", f.max_depth_m);
+  f.max_frame_age_s = param<double>(nh, "max_frame_age", f.max_frame_age_s);
+  f.max_surface_jump_ratio = param<double>(nh, "max_surface_jump_ratio", f.max_surface_jump_ratio);
+  const int frames_kept = param<int>(nh, "frames_kept", static_cast<int>(f.frames_kept));
+  if (frames_kept < 1 || frames_kept > 100) fail(nh, "frames_kept", "must be in 1..100");
+  f.frames_kept = static_cast<std::size_t>(frames_kept);
+  requirePositive(f.min_depth_m, nh, "min_depth");
+  requirePositive(f.max_depth_m, nh, "max_depth");
+  if (!(f.max_depth_m > f.min_depth_m)) fail(nh, "max_depth", "must exceed ~min_depth");
+  requirePositive(f.max_frame_age_s, nh, "max_frame_age");
+  requirePositive(f.max_surface_jump_ratio, nh, "max_surface_jump_ratio");
+  validateCore(nh, f);
+  c.edvs_camera_info = param<bool>(nh, "edvs_camera_info", c.edvs_camera_info);
+  c.edvs_frame = param<std::string>(nh, "edvs_frame", c.edvs_frame);
+  c.depth_frame = param<std::string>(nh, "depth_frame", c.depth_frame);
+  requireFrame(nh, "edvs_frame", c.edvs_frame);
+  requireFrame(nh, "depth_frame", c.depth_frame);
+  if (c.edvs_frame == c.depth_frame) fail(nh, "edvs_frame", "must differ from ~depth_frame");
+  c.publish_tf = param<bool>(nh, "publish_tf", c.publish_tf);
+  c.max_wait_s = param<double>(nh, "max_wait", c.max_wait_s);
+  if (!std::isfinite(c.max_wait_s) || c.max_wait_s < 0.0 || c.max_wait_s > 10.0) {
+    fail(nh, "max_wait", "must be a number of seconds in [0, 10]");
+  }
+  c.queue_size = param<int>(nh, "queue_size", c.queue_size);
+  if (c.queue_size < 1) fail(nh, "queue_size", "must be at least 1");
+  return c;
+}
+
+RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
+    const ros::NodeHandle& nh, const std::string& default_trajectory) {
+  RgbdEventSimulatorNodeConfig c;
+  c.trajectory = param<std::string>(nh, "trajectory", default_trajectory);
+  if (c.trajectory.empty()) fail(nh, "trajectory", "is not set (a TUM trajectory of the rig)");
+  c.t_begin_s = param<double>(nh, "t_begin", c.t_begin_s);
+  c.t_end_s = param<double>(nh, "t_end", c.t_end_s);
+  if (!std::isfinite(c.t_begin_s) || c.t_begin_s < 0.0) fail(nh, "t_begin", "must be >= 0 s");
+  if (!std::isfinite(c.t_end_s)) fail(nh, "t_end", "must be a number of seconds");
+  c.speed = param<double>(nh, "speed", c.speed);
+  requirePositive(c.speed, nh, "speed");
+  c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
+  requirePositive(c.publish_rate_hz, nh, "publish_rate");
+  c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
+  c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
+  requirePositive(c.clock_start_s, nh, "clock_start");
+  c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  const int seed = param<int>(nh, "seed", static_cast<int>(c.simulator.seed));
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  c.simulator.seed = c.simulator.events.seed = c.room.seed = static_cast<std::uint64_t>(seed);
+  const int depth_width = param<int>(nh, "depth_width", c.simulator.depth.camera.width);
+  if (depth_width != 320 && depth_width != 640) fail(nh, "depth_width", "must be 320 or 640");
+  c.simulator.depth.camera = c.simulator.depth.camera.scaled(
+      depth_width / static_cast<double>(c.simulator.depth.camera.width));
+  c.room.texture_contrast = param<double>(nh, "texture_contrast", c.room.texture_contrast);
+  c.simulator.events.noise_rate_hz_per_pixel =
+      param<double>(nh, "noise_rate", c.simulator.events.noise_rate_hz_per_pixel);
+  c.simulator.depth.frame_rate_hz =
+      param<double>(nh, "depth_rate", c.simulator.depth.frame_rate_hz);
+  requirePositive(c.simulator.depth.frame_rate_hz, nh, "depth_rate");
+  c.simulator.depth.clock_offset_s =
+      param<double>(nh, "depth_clock_offset", c.simulator.depth.clock_offset_s);
+  if (!std::isfinite(c.simulator.depth.clock_offset_s) ||
+      std::abs(c.simulator.depth.clock_offset_s) > 1.0) {
+    fail(nh, "depth_clock_offset", "must be a number of seconds in [-1, 1]");
+  }
+  c.edvs_frame = param<std::string>(nh, "edvs_frame", c.edvs_frame);
+  c.depth_frame = param<std::string>(nh, "depth_frame", c.depth_frame);
+  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
+  c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
+  requireFrame(nh, "edvs_frame", c.edvs_frame);
+  requireFrame(nh, "depth_frame", c.depth_frame);
+  requireFrame(nh, "map_frame", c.map_frame);
+  requireFrame(nh, "ground_truth_frame", c.ground_truth_frame);
+  if (c.map_frame == c.ground_truth_frame)
+    fail(nh, "ground_truth_frame", "must differ from ~map_frame");
+  c.path_length = param<int>(nh, "path_length", c.path_length);
+  if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
+  c.write_calibration = param<std::string>(nh, "write_calibration", c.write_calibration);
+  validateCore(nh, c.room);
+  validateCore(nh, c.simulator);
+  return c;
 }
 
 }  // namespace ebslam_ros

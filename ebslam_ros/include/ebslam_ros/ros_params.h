@@ -11,6 +11,9 @@
 #include <vector>
 
 #include <ebslam/camera_model.h>
+#include <ebslam/dedvs_fusion.h>
+#include <ebslam/dedvs_scene.h>
+#include <ebslam/dedvs_simulator.h>
 #include <ebslam/ebpf.h>
 #include <ebslam/ebslam2d.h>
 #include <ebslam/event.h>
@@ -164,5 +167,53 @@ extern const std::vector<std::string> kScenarioKeys;
 /// or the scenario file and key.
 EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& private_nh,
                                                       const std::string& default_scenario);
+
+/// Configuration of the DepthEventFusion nodelet (D-eDVS depth for every event, thesis 8.2).
+struct DepthEventFusionNodeConfig {
+  /// ~calibration (required): sensors yaml (ebslam/dedvs_io.h readDedvsSensors format: eDVS
+  /// intrinsics and distortion, depth intrinsics, depth_from_edvs, depth clock offset, frame rate)
+  std::string calibration;
+  ebslam::DedvsSensors sensors;      ///< read from ~calibration
+  ebslam::DepthFusionConfig fusion;  ///< ~min_depth, ~max_depth [m], ~max_frame_age [s],
+                                     ///< ~max_surface_jump_ratio, ~frames_kept
+  bool edvs_camera_info = false;     ///< ~edvs_camera_info: eDVS size, focal, centre from
+                                     ///< `camera_info` (kappas stay the calibration's)
+  std::string edvs_frame = "edvs_optical_frame";           ///< ~edvs_frame
+  std::string depth_frame = "camera_depth_optical_frame";  ///< ~depth_frame
+  bool publish_tf = true;  ///< ~publish_tf: static tf ~depth_frame -> ~edvs_frame
+  /// ~max_wait: longest wall time an EventArray newer than the latest depth frame waits for the
+  /// next (nearer) frame [s]
+  double max_wait_s = 0.2;
+  int queue_size = 100;  ///< ~queue_size: subscriber queues [messages]
+};
+
+DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle& private_nh);
+
+/// Configuration of the RgbdEventSimulator nodelet (D-eDVS simulator, thesis 8.2).
+struct RgbdEventSimulatorNodeConfig {
+  /// ~trajectory: TUM file of the rig (depth optical frame -> world); default the repository's
+  /// test/data/sample_session/pioneer_360_excerpt.txt
+  std::string trajectory;
+  double t_begin_s = 0.0;  ///< ~t_begin: start, seconds after the trajectory start
+  double t_end_s = -1.0;   ///< ~t_end: end, seconds after the start (< 0: the trajectory end)
+  double speed = 1.0;      ///< ~speed: simulated seconds per wall second
+  double publish_rate_hz = 100.0;     ///< ~publish_rate: EventArray per simulated second [Hz]
+  bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
+  double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the run's start with /clock [s]
+  bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  /// ~seed (events, depth noise), ~depth_width (320 or 640), ~noise_rate [Hz per pixel],
+  /// ~depth_rate [Hz], ~depth_clock_offset [s]; the rest the core's defaults
+  ebslam::DedvsSimulatorConfig simulator;
+  ebslam::RoomSceneConfig room;  ///< ~seed (furniture, textures), ~texture_contrast
+  std::string edvs_frame = "edvs_optical_frame";           ///< ~edvs_frame
+  std::string depth_frame = "camera_depth_optical_frame";  ///< ~depth_frame (colour registered)
+  std::string map_frame = "map";                           ///< ~map_frame
+  std::string ground_truth_frame = "ground_truth";         ///< ~ground_truth_frame: the rig
+  int path_length = 10000;                                 ///< ~path_length
+  std::string write_calibration;  ///< ~write_calibration: write the rig's sensors yaml there
+};
+
+RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
+    const ros::NodeHandle& private_nh, const std::string& default_trajectory);
 
 }  // namespace ebslam_ros
