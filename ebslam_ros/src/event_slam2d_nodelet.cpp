@@ -5,6 +5,11 @@
 //    scaled so that its 99 % quantile is 100; -1 where no event and no observation fell;
 //  - map/image (sensor_msgs/Image mono8, only while subscribed): mapToImage(M), dark = likely
 //    to fire, row r = map y of cell row r (as the grid);
+//  - map/normalisation (nav_msgs/OccupancyGrid, latched, published only while subscribed, with
+//    `map`): the normalisation map Z (eq. 7.7, how often each cell could have been observed)
+//    scaled linearly so that its maximum is 100 (0 = never observed), the localisation
+//    exploration map's input (Exploration nodelet; its eq. 7.8 normalisation is invariant to
+//    the scale);
 //  - service save_map (ebslam_msgs/SaveMap): <prefix>.png + <prefix>.yaml in map_server's
 //    layout, loadable by EventParticleFilter's ~map.
 // Both are in ~map_frame, stamped with the last event's time.
@@ -64,6 +69,8 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
       const ebslam::Ebslam2dConfig slam = config.slam;
       map_pub_ = getNodeHandle().advertise<nav_msgs::OccupancyGrid>("map", 1, true);
       image_pub_ = getNodeHandle().advertise<sensor_msgs::Image>("map/image", 1);
+      normalisation_pub_ =
+          getNodeHandle().advertise<nav_msgs::OccupancyGrid>("map/normalisation", 1, true);
       node_ = std::make_unique<PoseFilterNode>(
           getNodeHandle(), getPrivateNodeHandle(), config.node, slam.filter,
           [slam, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
@@ -122,6 +129,14 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
       }
     }
     map_pub_.publish(grid);
+    if (normalisation_pub_.getNumSubscribers() > 0 && !z.data.empty()) {
+      const float z_max = *std::max_element(z.data.begin(), z.data.end());
+      const float z_scale = z_max > 0.0f ? 100.0f / z_max : 0.0f;
+      for (std::size_t i = 0; i < z.cellCount(); ++i) {
+        grid.data[i] = static_cast<std::int8_t>(std::min(100.0f, std::round(z.data[i] * z_scale)));
+      }
+      normalisation_pub_.publish(grid);
+    }
     if (image_pub_.getNumSubscribers() > 0) {
       const cv::Mat image = ebslam::mapToImage(m);
       sensor_msgs::Image msg;
@@ -167,7 +182,7 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
   }
 
   std::unique_ptr<PoseFilterNode> node_;
-  ros::Publisher map_pub_, image_pub_;
+  ros::Publisher map_pub_, image_pub_, normalisation_pub_;
   ros::ServiceServer save_srv_;
   ros::WallDuration map_period_{1.0};
   ros::WallTime last_map_;

@@ -480,6 +480,82 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   requirePositive(c.speed, nh, "speed");
   c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
   requirePositive(c.publish_rate_hz, nh, "publish_rate");
+ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
+  ExplorationNodeConfig c;
+  ebslam::ExplorationConfig& e = c.exploration;
+  e.hex_spacing_m = param<double>(nh, "hex_spacing", e.hex_spacing_m);
+  e.grid_extent_m = param<double>(nh, "grid_extent", e.grid_extent_m);
+  e.robot_radius_m = param<double>(nh, "robot_radius", e.robot_radius_m);
+  e.bump_cone_depth_m = param<double>(nh, "bump_cone_depth", e.bump_cone_depth_m);
+  e.bump_cone_half_angle_rad =
+      param<double>(nh, "bump_cone_half_angle", e.bump_cone_half_angle_rad);
+  e.weight_z = param<double>(nh, "weight_z", e.weight_z);
+  e.weight_e = param<double>(nh, "weight_e", e.weight_e);
+  e.alpha = param<double>(nh, "alpha", e.alpha);
+  e.planner_max_nodes = param<int>(nh, "planner_max_nodes", e.planner_max_nodes);
+  e.planner_time_budget_s = param<double>(nh, "planner_time_budget", e.planner_time_budget_s);
+  e.keep_clear_of_blocked = param<bool>(nh, "keep_clear_of_blocked", e.keep_clear_of_blocked);
+  e.min_path_cells = param<int>(nh, "min_path_cells", e.min_path_cells);
+  e.max_path_cells = param<int>(nh, "max_path_cells", e.max_path_cells);
+  e.waypoint_tolerance_m = param<double>(nh, "waypoint_tolerance", e.waypoint_tolerance_m);
+  e.lookahead_m = param<double>(nh, "lookahead", e.lookahead_m);
+  e.turn_in_place_rad = param<double>(nh, "turn_in_place", e.turn_in_place_rad);
+  e.heading_gain = param<double>(nh, "heading_gain", e.heading_gain);
+  e.max_speed_mps = param<double>(nh, "max_speed", e.max_speed_mps);
+  e.max_turn_rate_rps = param<double>(nh, "max_turn_rate", e.max_turn_rate_rps);
+  e.backout_time_s = param<double>(nh, "backout_time", e.backout_time_s);
+  e.backout_speed_mps = param<double>(nh, "backout_speed", e.backout_speed_mps);
+  e.max_bumps_in_a_row = param<int>(nh, "max_bumps_in_a_row", e.max_bumps_in_a_row);
+  e.pose_timeout_s = param<double>(nh, "pose_timeout", e.pose_timeout_s);
+  e.pose_jump_m = param<double>(nh, "pose_jump", e.pose_jump_m);
+  e.pose_jump_rad = param<double>(nh, "pose_jump_rad", e.pose_jump_rad);
+  validateCore(nh, e);
+  c.control_rate_hz = param<double>(nh, "control_rate", c.control_rate_hz);
+  requirePositive(c.control_rate_hz, nh, "control_rate");
+  if (c.control_rate_hz > 1000.0) fail(nh, "control_rate", "must be at most 1000 Hz");
+  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
+  requireFrame(nh, "map_frame", c.map_frame);
+  c.use_localisation_map = param<bool>(nh, "use_localisation_map", c.use_localisation_map);
+  c.markers_period_s = param<double>(nh, "markers_period", c.markers_period_s);
+  requirePositive(c.markers_period_s, nh, "markers_period");
+  return c;
+}
+
+ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
+    const ros::NodeHandle& nh, const std::string& default_floor_plan) {
+  ClosedLoopSimulatorNodeConfig c;
+  c.floor_plan = param<std::string>(nh, "floor_plan", default_floor_plan);
+  if (c.floor_plan.empty()) fail(nh, "floor_plan", "is not set (a floor-plan file)");
+  ebslam::ClosedLoopSimulatorConfig& s = c.simulator;
+  const CeilingSensorConfig sensor = loadCeilingSensorConfig(nh);
+  s.events.camera = sensor.camera;
+  s.ceiling_height_m = sensor.ceiling_distance_m;
+  // Real time on a shared machine: the rates of the long evaluation runs (docs/results/
+  // exploration.md) rather than the simulator's finest defaults.
+  s.events.render_rate_hz = 100.0;
+  s.events.max_step_motion_px = 0.5;
+  // The core keeps every ground-truth pose; the node publishes its own at each step.
+  s.ground_truth_rate_hz = 1.0;
+  const int seed = param<int>(nh, "seed", static_cast<int>(s.seed));
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  s.seed = static_cast<std::uint64_t>(seed);
+  s.events.events.noise_rate_hz_per_pixel =
+      param<double>(nh, "noise_rate", s.events.events.noise_rate_hz_per_pixel);
+  s.robot.radius_m = param<double>(nh, "robot_radius", s.robot.radius_m);
+  s.robot.max_speed_mps = param<double>(nh, "max_speed", s.robot.max_speed_mps);
+  s.robot.max_turn_rate_rps = param<double>(nh, "max_turn_rate", s.robot.max_turn_rate_rps);
+  s.robot.bump_segments = param<int>(nh, "bump_segments", s.robot.bump_segments);
+  if (s.robot.bump_segments < 1 || s.robot.bump_segments > 32) {
+    fail(nh, "bump_segments", "must be in 1..32");
+  }
+  validateCore(nh, s);
+  c.step_s = param<double>(nh, "step", c.step_s);
+  requirePositive(c.step_s, nh, "step");
+  if (c.step_s > 1.0) fail(nh, "step", "must be at most 1 s");
+  c.speed = param<double>(nh, "speed", c.speed);
+  requirePositive(c.speed, nh, "speed");
+  c.cmd_timeout_s = param<double>(nh, "cmd_timeout", c.cmd_timeout_s);
+  requirePositive(c.cmd_timeout_s, nh, "cmd_timeout");
   c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
@@ -518,6 +594,16 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   c.write_calibration = param<std::string>(nh, "write_calibration", c.write_calibration);
   validateCore(nh, c.room);
   validateCore(nh, c.simulator);
+  c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
+  c.base_frame = param<std::string>(nh, "base_frame", c.base_frame);
+  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
+  c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
+  requireFrame(nh, "frame_id", c.frame_id);
+  requireFrame(nh, "base_frame", c.base_frame);
+  requireFrame(nh, "map_frame", c.map_frame);
+  requireFrame(nh, "ground_truth_frame", c.ground_truth_frame);
+  c.path_length = param<int>(nh, "path_length", c.path_length);
+  if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
   return c;
 }
 

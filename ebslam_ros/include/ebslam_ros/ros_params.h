@@ -14,11 +14,13 @@
 #include <ebslam/dedvs_fusion.h>
 #include <ebslam/dedvs_scene.h>
 #include <ebslam/dedvs_simulator.h>
+#include <ebslam/closed_loop_simulator.h>
 #include <ebslam/ebpf.h>
 #include <ebslam/ebslam2d.h>
 #include <ebslam/event.h>
 #include <ebslam/event_denoiser.h>
 #include <ebslam/event_io.h>
+#include <ebslam/exploration.h>
 #include <ebslam/particles2d.h>
 #include <ebslam/simulator.h>
 #include <ebslam/simulator_scenes.h>
@@ -215,5 +217,45 @@ struct RgbdEventSimulatorNodeConfig {
 
 RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
     const ros::NodeHandle& private_nh, const std::string& default_trajectory);
+/// The Exploration nodelet (thesis 7.4): the explorer's parameters under their core names
+/// (ebslam::ExplorationConfig, units in its comments: ~hex_spacing [m], ~grid_extent [m],
+/// ~robot_radius [m], ~bump_cone_depth [m], ~bump_cone_half_angle [rad], ~weight_z, ~weight_e,
+/// ~alpha, ~planner_max_nodes, ~planner_time_budget [s], ~keep_clear_of_blocked,
+/// ~min_path_cells, ~max_path_cells, ~waypoint_tolerance [m], ~lookahead [m], ~turn_in_place
+/// [rad], ~heading_gain [1/s], ~max_speed [m/s], ~max_turn_rate [rad/s], ~backout_time [s],
+/// ~backout_speed [m/s], ~max_bumps_in_a_row, ~pose_timeout [s], ~pose_jump [m],
+/// ~pose_jump_rad [rad]) and the node's own.
+struct ExplorationNodeConfig {
+  ebslam::ExplorationConfig exploration;
+  double control_rate_hz = 20.0;  ///< ~control_rate: control steps and cmd_vel per second [Hz]
+  std::string map_frame = "map";  ///< ~map_frame: frame of pose, Z map, plan and markers
+  /// ~use_localisation_map: subscribe EB-SLAM's normalisation map (`map/normalisation`) for Z;
+  /// false: Z stays 0 (only E and the bumps guide the robot).
+  bool use_localisation_map = true;
+  double markers_period_s = 1.0;  ///< ~markers_period: grid_markers while subscribed [s]
+};
+ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& private_nh);
+
+/// The closed-loop floor-robot simulator (ClosedLoopSimulator nodelet, thesis 7.4).
+struct ClosedLoopSimulatorNodeConfig {
+  std::string floor_plan;  ///< ~floor_plan: floor-plan file (ebslam/floor_plan.h)
+  /// The eDVS (~camera/*, ~ceiling_distance as the filters'), ~seed (event model and ceiling),
+  /// ~noise_rate [Hz per pixel], robot limits ~robot_radius [m], ~max_speed [m/s],
+  /// ~max_turn_rate [rad/s], ~bump_segments.
+  ebslam::ClosedLoopSimulatorConfig simulator;
+  double step_s = 0.02;               ///< ~step: simulated time per step (events, bump, pose) [s]
+  double speed = 1.0;                 ///< ~speed: simulated seconds per wall second
+  double cmd_timeout_s = 0.5;         ///< ~cmd_timeout: stop when cmd_vel is older [s, simulated]
+  bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
+  double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the start with /clock [s]
+  bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  std::string frame_id = "edvs_optical_frame";      ///< ~frame_id: the events' frame
+  std::string base_frame = "base_link";             ///< ~base_frame: the bump readings' frame
+  std::string map_frame = "map";                    ///< ~map_frame: origin at the start pose
+  std::string ground_truth_frame = "ground_truth";  ///< ~ground_truth_frame
+  int path_length = 10000;                          ///< ~path_length: poses on ground_truth/path
+};
+ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
+    const ros::NodeHandle& private_nh, const std::string& default_floor_plan);
 
 }  // namespace ebslam_ros

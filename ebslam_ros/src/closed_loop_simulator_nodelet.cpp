@@ -1,0 +1,258 @@
+// Closed-loop floor robot for exploration (thesis 7.4) as a nodelet: ebslam::ClosedLoopSimulator
+// (closed_loop_simulator.h), a differential-drive disc robot with a bump ring in a room given by
+// ~floor_plan, under a seeded ceiling seen by an upward eDVS, driven by velocity commands.
+// Topics (relative names):
+//  - cmd_vel (geometry_msgs/Twist, in): linear.x [m/s], angular.z [rad/s] in ~base_frame,
+//    clamped to the robot's limits; none for ~cmd_timeout (simulated) or a non-finite one: the
+//    robot brakes to a stop;
+//  - events (ebslam_msgs/EventArray): the eDVS events of each ~step, in ~frame_id, width x
+//    height of ~camera; header.stamp = ts of the last event (the step's end when empty);
+//  - bump (ebslam_msgs/Bump): the bump ring's reading at each step's end, in ~base_frame;
+//  - ground_truth/pose (geometry_msgs/PoseStamped), ground_truth/path (nav_msgs/Path, only
+//    while subscribed, the last ~path_length poses) and tf ~map_frame -> ~ground_truth_frame:
+//    the true sensor (optical frame) pose at each step's end, as EventSimulator;
+//  - floor_plan (visualization_msgs/Marker, latched): walls and obstacles as lines;
+//  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+// Frames: ~map_frame has its origin at the robot's start pose (x forward, z up), which is where
+// EventSlam2d's map frame lies with its default ~initial_pose (0, 0, 0) and an identity mount.
+// Time: simulated time t [s] is stamped anchor + t / ~speed (anchor: wall time at the start) or
+// ~clock_start + t with /clock; steps are paced at ~speed times real time (or run as fast as
+// they are simulated when that is slower). The simulation runs in a thread of its own.
+#include <ebslam_msgs/Bump.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/Twist.h>
+#include <nav_msgs/Path.h>
+#include <nodelet/nodelet.h>
+#include <ros/package.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/Marker.h>
+
+#include <ebslam/closed_loop_simulator.h>
+#include <ebslam/event_clock.h>
+#include <ebslam/floor_plan.h>
+#include <ebslam/simulator_scenes.h>
+
+#include <atomic>
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <pluginlib/class_list_macros.hpp>
+#include <thread>
+
+#include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/ros_params.h"
+
+namespace ebslam_ros {
+
+class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
+ public:
+  ~ClosedLoopSimulatorNodelet() override {
+    stop_ = true;
+    if (worker_.joinable()) worker_.join();
+  }
+
+ private:
+  static constexpr double kWarnPeriodS = 5.0;  // throttle of repeated warnings [s, wall]
+
+  void onInit() override {
+    const std::string package = ros::package::getPath("ebslam_ros");
+    const std::string default_plan =
+        package.empty() ? "" : package + "/../src/ebslam/floor_plans/office.txt";
+    try {
+      config_ = loadClosedLoopSimulatorNodeConfig(getPrivateNodeHandle(), default_plan);
+      plan_ = ebslam::readFloorPlan(config_.floor_plan, config_.simulator.robot.radius_m);
+      simulator_ = std::make_unique<ebslam::ClosedLoopSimulator>(plan_, config_.simulator);
+    } catch (const std::exception& error) {
+      NODELET_ERROR("closed-loop simulator not started: %s", error.what());
+      return;
+    }
+    ros::NodeHandle& nh = getNodeHandle();
+    events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
+    bump_pub_ = nh.advertise<ebslam_msgs::Bump>("bump", 100);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
+    path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
+    plan_pub_ = nh.advertise<visualization_msgs::Marker>("floor_plan", 1, true);
+    if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    cmd_sub_ = nh.subscribe("cmd_vel", 10, &ClosedLoopSimulatorNodelet::onCommand, this);
+    NODELET_INFO("closed-loop simulation of '%s' (%s), step %.3f s at %.2fx%s", plan_.name.c_str(),
+                 config_.floor_plan.c_str(), config_.step_s, config_.speed,
+                 config_.publish_clock ? " with /clock" : "");
+    worker_ = std::thread([this] { run(); });
+  }
+
+  void onCommand(const geometry_msgs::Twist::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!std::isfinite(msg->linear.x) || !std::isfinite(msg->angular.z)) {
+      command_.reset();  // brake
+      const ros::WallTime now = ros::WallTime::now();
+      if (warned_.isZero() || (now - warned_).toSec() >= kWarnPeriodS) {
+        warned_ = now;
+        NODELET_ERROR("non-finite cmd_vel (%g m/s, %g rad/s): braking", msg->linear.x,
+                      msg->angular.z);
+      }
+      return;
+    }
+    command_ = ebslam::VelocityCommand{msg->linear.x, msg->angular.z};
+    command_time_s_ = sim_time_s_;
+  }
+
+  // Room frame -> ~map_frame (origin at the start pose).
+  Eigen::Vector3d toMap(const Eigen::Vector3d& room) const {
+    const Eigen::Vector3d& s = plan_.start;
+    const double c = std::cos(s.z()), n = std::sin(s.z());
+    const double dx = room.x() - s.x(), dy = room.y() - s.y();
+    return {c * dx + n * dy, -n * dx + c * dy, std::remainder(room.z() - s.z(), 2.0 * M_PI)};
+  }
+
+  void run() {
+    if (config_.wait_for_subscribers) {
+      // roscpp counts a subscriber before its side of the connection is ready.
+      while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
+      ros::WallDuration(0.5).sleep();
+    }
+    if (stop_) return;
+    const ros::Time anchor =
+        config_.publish_clock ? ros::Time(config_.clock_start_s) : ros::Time::now();
+    ebslam::EventClock clock(config_.publish_clock ? 1.0 : config_.speed);
+    clock.anchor(0, ebslam_msgs::toMicroseconds(anchor));
+    const ros::WallTime wall_start = ros::WallTime::now();
+    if (config_.publish_clock) publishClock(anchor);
+    publishFloorPlan(anchor);
+    const ebslam::SensorSize sensor{
+        static_cast<std::uint32_t>(config_.simulator.events.camera.width),
+        static_cast<std::uint32_t>(config_.simulator.events.camera.height)};
+    ebslam::EventVector events;
+    std::uint32_t sequence = 0;
+    try {
+      while (!stop_) {
+        ebslam::VelocityCommand command;
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          if (command_ && sim_time_s_ - command_time_s_ <= config_.cmd_timeout_s) {
+            command = *command_;
+          }
+        }
+        events.clear();
+        const ebslam::BumpReading bump = simulator_->step(command, config_.step_s, events);
+        const double t = simulator_->time();
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          sim_time_s_ = t;
+        }
+        const ros::WallTime due = wall_start + ros::WallDuration(t / config_.speed);
+        while (!stop_ && ros::WallTime::now() < due) {
+          std::min(due - ros::WallTime::now(), ros::WallDuration(0.1)).sleep();
+        }
+        if (stop_) break;
+        const ros::Time stamp =
+            ebslam_msgs::toRosTime(clock.map(std::llround(t * 1e6)).value_or(0));
+        if (config_.publish_clock) publishClock(stamp);
+        for (ebslam::Event& e : events) e.t_us = clock.stamp(e.t_us).value_or(0);
+        ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(events, sensor, config_.frame_id);
+        if (events.empty()) msg.header.stamp = stamp;
+        msg.header.seq = sequence++;
+        events_pub_.publish(msg);
+        ebslam_msgs::Bump reading;
+        reading.header.stamp = stamp;
+        reading.header.frame_id = config_.base_frame;
+        reading.segment_count = static_cast<std::uint8_t>(bump.segment_count);
+        reading.segments = bump.segments;
+        reading.direction = bump.contact() ? bump.direction_rad : 0.0;
+        bump_pub_.publish(reading);
+        publishGroundTruth(stamp);
+      }
+    } catch (const std::exception& error) {
+      NODELET_ERROR("simulation failed: %s", error.what());
+    }
+  }
+
+  void publishClock(const ros::Time& time) {
+    rosgraph_msgs::Clock clock;
+    clock.clock = time;
+    clock_pub_.publish(clock);
+  }
+
+  void publishGroundTruth(const ros::Time& stamp) {
+    const Eigen::Vector3d p = toMap(simulator_->pose());
+    const ebslam::StampedPose camera = ebslam::se2ToFloorPose(0.0, p.x(), p.y(), p.z());
+    geometry_msgs::PoseStamped msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = config_.map_frame;
+    msg.pose.position.x = camera.position.x();
+    msg.pose.position.y = camera.position.y();
+    msg.pose.position.z = camera.position.z();
+    msg.pose.orientation.x = camera.orientation.x();
+    msg.pose.orientation.y = camera.orientation.y();
+    msg.pose.orientation.z = camera.orientation.z();
+    msg.pose.orientation.w = camera.orientation.w();
+    pose_pub_.publish(msg);
+    geometry_msgs::TransformStamped tf;
+    tf.header = msg.header;
+    tf.child_frame_id = config_.ground_truth_frame;
+    tf.transform.translation.x = msg.pose.position.x;
+    tf.transform.translation.y = msg.pose.position.y;
+    tf.transform.translation.z = msg.pose.position.z;
+    tf.transform.rotation = msg.pose.orientation;
+    tf_broadcaster_.sendTransform(tf);
+    path_.push_back(msg);
+    while (path_.size() > static_cast<std::size_t>(config_.path_length)) path_.pop_front();
+    const ros::WallTime now = ros::WallTime::now();
+    if (path_pub_.getNumSubscribers() > 0 && (now - last_path_).toSec() >= 1.0) {
+      last_path_ = now;
+      nav_msgs::Path path;
+      path.header = msg.header;
+      path.poses.assign(path_.begin(), path_.end());
+      path_pub_.publish(path);
+    }
+  }
+
+  void publishFloorPlan(const ros::Time& stamp) {
+    visualization_msgs::Marker m;
+    m.header.stamp = stamp;
+    m.header.frame_id = config_.map_frame;
+    m.ns = "floor_plan";
+    m.type = visualization_msgs::Marker::LINE_LIST;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = 0.03;  // line width [m]
+    m.color.r = m.color.g = m.color.b = 0.9f;
+    m.color.a = 1.0f;
+    const auto add = [&](const ebslam::Polygon2& polygon) {
+      for (std::size_t i = 0; i < polygon.size(); ++i) {
+        for (const Eigen::Vector2d& v : {polygon[i], polygon[(i + 1) % polygon.size()]}) {
+          const Eigen::Vector3d q = toMap({v.x(), v.y(), 0.0});
+          geometry_msgs::Point p;
+          p.x = q.x();
+          p.y = q.y();
+          m.points.push_back(p);
+        }
+      }
+    };
+    add(plan_.walls);
+    for (const ebslam::Polygon2& obstacle : plan_.obstacles) add(obstacle);
+    plan_pub_.publish(m);
+  }
+
+  ClosedLoopSimulatorNodeConfig config_;
+  ebslam::FloorPlan plan_;
+  std::unique_ptr<ebslam::ClosedLoopSimulator> simulator_;
+  std::mutex mutex_;  // guards command_, command_time_s_, sim_time_s_, warned_
+  std::optional<ebslam::VelocityCommand> command_;
+  double command_time_s_ = 0.0;  // simulated time of the last command's arrival [s]
+  double sim_time_s_ = 0.0;
+  ros::WallTime warned_, last_path_;
+  std::deque<geometry_msgs::PoseStamped> path_;
+  ros::Subscriber cmd_sub_;
+  ros::Publisher events_pub_, bump_pub_, pose_pub_, path_pub_, plan_pub_, clock_pub_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  std::atomic<bool> stop_{false};
+  std::thread worker_;
+};
+
+}  // namespace ebslam_ros
+
+PLUGINLIB_EXPORT_CLASS(ebslam_ros::ClosedLoopSimulatorNodelet, nodelet::Nodelet)
