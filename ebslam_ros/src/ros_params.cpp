@@ -192,6 +192,107 @@ EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   return config;
 }
 
+ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
+                                          const ebslam::Ebslam3dConfig& defaults) {
+  ebslam::Ebslam3dConfig c = defaults;
+  c.num_particles = param<int>(nh, "num_particles", c.num_particles);
+  c.batch_size = param<int>(nh, "batch_size", c.batch_size);
+  c.resample_every = param<int>(nh, "resample_every", c.resample_every);
+  c.event_share = param<double>(nh, "event_share", c.event_share);
+  c.sigma_position_m = param<double>(nh, "sigma_position", c.sigma_position_m);
+  c.sigma_rotation_rad = param<double>(nh, "sigma_rotation", c.sigma_rotation_rad);
+  c.score_alpha = param<double>(nh, "score_alpha", c.score_alpha);
+  c.voxel_size_m = param<double>(nh, "voxel_size", c.voxel_size_m);
+  c.splat_lambda = param<double>(nh, "splat_lambda", c.splat_lambda);
+  c.focal_px = param<double>(nh, "focal_px", c.focal_px);
+  c.min_range_m = param<double>(nh, "min_range", c.min_range_m);
+  c.max_range_m = param<double>(nh, "max_range", c.max_range_m);
+  const double map_mb =
+      param<double>(nh, "max_map_mb", static_cast<double>(c.max_map_bytes) / (1024.0 * 1024.0));
+  if (!std::isfinite(map_mb) || map_mb < 0.0 || map_mb > 1024.0 * 1024.0) {
+    fail(nh, "max_map_mb", "must be a number of MiB in [0, 1048576] (0 = unbounded)");
+  }
+  c.max_map_bytes = static_cast<std::size_t>(std::llround(map_mb * 1024.0 * 1024.0));
+  const std::string splat = param<std::string>(
+      nh, "splat",
+      c.splat == ebslam::MapSplat3d::kAllParticles ? "all_particles" : "expected_pose");
+  if (splat == "expected_pose") {
+    c.splat = ebslam::MapSplat3d::kExpectedPose;
+  } else if (splat == "all_particles") {
+    c.splat = ebslam::MapSplat3d::kAllParticles;
+  } else {
+    fail(nh, "splat", "= '" + splat + "' is not one of expected_pose, all_particles");
+  }
+  const int seed = param<int>(nh, "seed", static_cast<int>(c.seed));
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  c.seed = static_cast<std::uint64_t>(seed);
+  // The core names its fields; name the parameters where the mapping is not obvious.
+  requirePositive(c.voxel_size_m, nh, "voxel_size");
+  requirePositive(c.splat_lambda, nh, "splat_lambda");
+  requirePositive(c.focal_px, nh, "focal_px");
+  if (!(c.min_range_m >= 0.0) || !std::isfinite(c.max_range_m) ||
+      !(c.min_range_m < c.max_range_m)) {
+    fail(nh, "min_range", "and ~max_range must satisfy 0 <= min_range < max_range [m]");
+  }
+  validateCore(nh, c);
+  return c;
+}
+
+EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
+  EventSlam3dNodeConfig config;
+  config.slam = loadEbslam3dConfig(nh, ebslam::Ebslam3dConfig::defaults());
+  std::vector<double> start;
+  if (nh.getParam("initial_pose", start)) {
+    if (start.size() != 6) fail(nh, "initial_pose", "must be [x, y, z, roll, pitch, yaw]");
+    for (double v : start) {
+      if (!std::isfinite(v)) fail(nh, "initial_pose", "must hold finite numbers");
+    }
+    std::copy(start.begin(), start.end(), config.initial_pose.begin());
+  } else if (nh.hasParam("initial_pose")) {
+    fail(nh, "initial_pose", "must be a list [x, y, z, roll, pitch, yaw]");
+  }
+  config.map_frame = param<std::string>(nh, "map_frame", config.map_frame);
+  config.odom_frame = param<std::string>(nh, "odom_frame", config.odom_frame);
+  config.base_frame = param<std::string>(nh, "base_frame", config.base_frame);
+  config.sensor_frame = param<std::string>(nh, "sensor_frame", config.sensor_frame);
+  config.odom_from_tf = param<bool>(nh, "odom_from_tf", config.odom_from_tf);
+  config.mount_from_tf = param<bool>(nh, "mount_from_tf", config.mount_from_tf);
+  config.mount_xyz = triple(nh, "mount_xyz", config.mount_xyz);
+  config.mount_rpy = triple(nh, "mount_rpy", config.mount_rpy);
+  config.publish_tf = param<bool>(nh, "publish_tf", config.publish_tf);
+  config.path_length = param<int>(nh, "path_length", config.path_length);
+  config.queue_size = param<int>(nh, "queue_size", config.queue_size);
+  config.max_backward_s = param<double>(nh, "max_backward", config.max_backward_s);
+  config.gap_warning_s = param<double>(nh, "gap_warning", config.gap_warning_s);
+  config.max_events_per_update =
+      param<int>(nh, "max_events_per_update", config.max_events_per_update);
+  config.map_threshold = param<double>(nh, "map_threshold", config.map_threshold);
+  config.map_publish_period_s =
+      param<double>(nh, "map_publish_period", config.map_publish_period_s);
+  config.map_file = param<std::string>(nh, "map_file", config.map_file);
+  requireFrame(nh, "map_frame", config.map_frame);
+  requireFrame(nh, "odom_frame", config.odom_frame);
+  requireFrame(nh, "base_frame", config.base_frame);
+  requireFrame(nh, "sensor_frame", config.sensor_frame);
+  if (config.map_frame == config.odom_frame || config.odom_frame == config.base_frame ||
+      config.base_frame == config.sensor_frame || config.map_frame == config.base_frame ||
+      config.map_frame == config.sensor_frame || config.odom_frame == config.sensor_frame) {
+    fail(nh, "map_frame", "odom_frame, base_frame and sensor_frame must be four different frames");
+  }
+  if (config.path_length < 1) fail(nh, "path_length", "must be at least 1");
+  if (config.queue_size < 1) fail(nh, "queue_size", "must be at least 1");
+  if (!std::isfinite(config.max_backward_s) || config.max_backward_s < 0.0) {
+    fail(nh, "max_backward", "must be a non-negative number of seconds");
+  }
+  requirePositive(config.gap_warning_s, nh, "gap_warning");
+  if (config.max_events_per_update < 1000) fail(nh, "max_events_per_update", "must be >= 1000");
+  if (!std::isfinite(config.map_threshold) || config.map_threshold < 0.0) {
+    fail(nh, "map_threshold", "must be a non-negative number");
+  }
+  requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  return config;
+}
+
 ebslam::BackgroundActivityFilterConfig loadBackgroundActivityFilterConfig(
     const ros::NodeHandle& nh) {
   ebslam::BackgroundActivityFilterConfig c;

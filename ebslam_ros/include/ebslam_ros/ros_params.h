@@ -8,6 +8,7 @@
 #include <string>
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include <ebslam/camera_model.h>
@@ -17,6 +18,7 @@
 #include <ebslam/closed_loop_simulator.h>
 #include <ebslam/ebpf.h>
 #include <ebslam/ebslam2d.h>
+#include <ebslam/ebslam3d.h>
 #include <ebslam/event.h>
 #include <ebslam/event_denoiser.h>
 #include <ebslam/event_io.h>
@@ -103,6 +105,41 @@ struct EventSlam2dNodeConfig {
   double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
+
+/// EB-SLAM-3D core (ebslam/ebslam3d.h) over `defaults`: ~num_particles, ~batch_size,
+/// ~resample_every, ~event_share, ~sigma_position [m], ~sigma_rotation [rad], ~score_alpha,
+/// ~voxel_size [m], ~splat_lambda, ~focal_px [px], ~min_range [m], ~max_range [m],
+/// ~max_map_mb [MiB, 0 = unbounded], ~splat (expected_pose|all_particles), ~seed.
+ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& private_nh,
+                                          const ebslam::Ebslam3dConfig& defaults);
+
+/// The EventSlam3d nodelet: a depth-event sensor (D-eDVS) anywhere on the robot, full 6-DoF.
+struct EventSlam3dNodeConfig {
+  ebslam::Ebslam3dConfig slam;
+  /// ~initial_pose: base_link in map [x, y, z m, roll, pitch, yaw rad] at the (re)start.
+  std::array<double, 6> initial_pose{0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  std::string map_frame = "map";                    ///< ~map_frame
+  std::string odom_frame = "odom";                  ///< ~odom_frame
+  std::string base_frame = "base_link";             ///< ~base_frame
+  std::string sensor_frame = "edvs_optical_frame";  ///< ~sensor_frame: the events' frame
+  bool odom_from_tf = false;                        ///< ~odom_from_tf: as PoseFilterNodeConfig
+  bool mount_from_tf = false;                       ///< ~mount_from_tf: as PoseFilterNodeConfig
+  std::array<double, 3> mount_xyz{0.0, 0.0, 0.0};   ///< ~mount_xyz [m]
+  /// ~mount_rpy [rad]: default the optical frame of a sensor looking along base_link's x (REP 103:
+  /// optical z forward, x right, y down).
+  std::array<double, 3> mount_rpy{-M_PI / 2, 0.0, -M_PI / 2};
+  bool publish_tf = true;         ///< ~publish_tf: map -> odom (-> base_link)
+  int path_length = 10000;        ///< ~path_length: poses kept on `path`
+  int queue_size = 100;           ///< ~queue_size: DepthEventArray messages queued
+  double max_backward_s = 0.001;  ///< ~max_backward: earlier events are clamped up to this [s]
+  double gap_warning_s = 1.0;     ///< ~gap_warning: warn about pauses in the stream longer [s]
+  /// ~max_events_per_update: events per filter call and pose (a huge message gives several).
+  int max_events_per_update = 200000;
+  double map_threshold = 1.0;         ///< ~map_threshold: voxels above this value go to `map`
+  double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
+  std::string map_file = "ebslam3d_map.ply";  ///< ~map_file: save_map's file (.ply or .pcd)
+};
+EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& private_nh);
 
 /// Background-activity filter (ebslam/event_denoiser.h) from `nh`: ~window [s] 0.1,
 /// ~min_support 3, ~polarity_match true, ~refractory_filter false, ~refractory_period [s] 0.001

@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ebslam {
 
@@ -290,6 +291,23 @@ void EventSlam3d::reset(const Pose3& start) {
   share_accumulator_ = 0.0;
   since_resample_ = 0;
   last_t_us_ = std::numeric_limits<std::int64_t>::min();
+}
+
+void EventSlam3d::setConfig(const Ebslam3dConfig& config) {
+  config.validate();
+  if (config.voxel_size_m != config_.voxel_size_m ||
+      config.max_map_bytes != config_.max_map_bytes) {
+    throw std::invalid_argument(
+        "EventSlam3d::setConfig: voxel_size_m and max_map_bytes are fixed for a map");
+  }
+  const bool count_changed = config.num_particles != config_.num_particles;
+  std::vector<BatchDecay> decay;
+  for (int b = 1; b <= config.batch_size; ++b) decay.push_back(batchDecay(config.score_alpha, b));
+  config_ = config;
+  batch_decay_ = std::move(decay);
+  // process() leaves no partial batch behind, so in_batch_ is 0 here.
+  since_resample_ = std::min(since_resample_, config_.resample_every - 1);
+  if (count_changed) particles_.reset(config_.num_particles, expected_, config_.seed);
 }
 
 EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::size_t count) {

@@ -364,5 +364,36 @@ TEST(EventSlam3d, DeterministicForASeedAndEventShareThinsEvenly) {
   EXPECT_EQ(stats.used + stats.skipped + stats.rejected, events.size());
 }
 
+TEST(EventSlam3d, SetConfigKeepsTheMapAndRestartsParticlesAtTheEstimate) {
+  const Trajectory truth = testPath(0.4);
+  const PointEventVector events = testEvents(truth);
+  const std::size_t half = events.size() / 2;
+  EventSlam3d slam(Ebslam3dConfig::defaults());
+  slam.process(events.data(), half);
+  const std::size_t chunks = slam.map().chunkCount();
+  const Pose3 estimate = slam.estimate();
+  Ebslam3dConfig c = slam.config();
+  c.num_particles = 40;
+  c.batch_size = 5;
+  c.resample_every = 50;
+  slam.setConfig(c);
+  EXPECT_EQ(slam.particles().size(), 40);
+  EXPECT_EQ(slam.map().chunkCount(), chunks);
+  for (int i = 0; i < slam.particles().size(); ++i) {
+    EXPECT_NEAR((slam.particles().particle(i).position - estimate.position).norm(), 0.0, 1e-6);
+  }
+  slam.process(events.data() + half, events.size() - half);
+  EXPECT_LT((slam.estimate().position - truth.back().position).norm(), 0.05);
+  // Invalid or map-changing configs are refused and change nothing.
+  Ebslam3dConfig bad = slam.config();
+  bad.batch_size = 0;
+  EXPECT_THROW(slam.setConfig(bad), std::invalid_argument);
+  bad = slam.config();
+  bad.voxel_size_m = 0.02;
+  EXPECT_THROW(slam.setConfig(bad), std::invalid_argument);
+  EXPECT_EQ(slam.config().batch_size, 5);
+  EXPECT_EQ(slam.particles().size(), 40);
+}
+
 }  // namespace
 }  // namespace ebslam

@@ -144,6 +144,13 @@ class EventSlam3d {
 
   /// Restarts with an empty map and all particles at `start` (the time order starts afresh).
   void reset(const Pose3& start = {});
+  /// Changes the filter's knobs while running (the map is kept): particle count, batch size,
+  /// resampling interval, event share, diffusion, score alpha, splat, ranges (the seed is used
+  /// when the particles restart). A new particle count restarts the particles at the current
+  /// estimate p_* (scores zero). Throws std::invalid_argument (nothing changed) for an invalid
+  /// config or a change of the map's layout (voxel_size_m, max_map_bytes), which needs a new
+  /// EventSlam3d.
+  void setConfig(const Ebslam3dConfig& config);
 
   /// Expected pose p_* (score-weighted mean, updated after every batch).
   const Pose3& estimate() const { return expected_; }
