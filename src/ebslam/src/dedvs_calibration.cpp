@@ -1,0 +1,660 @@
+#include "ebslam/dedvs_calibration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+#include <Eigen/Dense>
+
+#include "ebslam/simulator.h"
+#include "ebslam/trajectory.h"
+
+namespace ebslam {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw std::invalid_argument(message);
+}
+
+StampedPose toStamped(double t_s, const Eigen::Isometry3d& pose) {
+  StampedPose stamped;
+  stamped.t_s = t_s;
+  stamped.position = pose.translation();
+  stamped.orientation = Eigen::Quaterniond(pose.linear()).normalized();
+  return stamped;
+}
+
+Eigen::Isometry3d toIsometry(const StampedPose& pose) {
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.linear() = pose.orientation.normalized().toRotationMatrix();
+  transform.translation() = pose.position;
+  return transform;
+}
+
+// Checkerboard texture: `squares` x `squares` squares of 16 texels, dark and light, with the
+// middle 3 x 3 squares light (the LED's surround: uniform, so that the LED's spot looks the
+// same on all sides).
+cv::Mat checkerboard(int squares) {
+  constexpr int kTexels = 16;
+  cv::Mat texture(squares * kTexels, squares * kTexels, CV_32FC1);
+  const int middle = squares / 2;
+  for (int row = 0; row < texture.rows; ++row) {
+    for (int col = 0; col < texture.cols; ++col) {
+      const int sr = row / kTexels, sc = col / kTexels;
+      const bool light =
+          (sr + sc) % 2 == 0 || (std::abs(sr - middle) <= 1 && std::abs(sc - middle) <= 1);
+      texture.at<float>(row, col) = light ? 0.7f : 0.3f;  // low contrast: fewer plate events
+    }
+  }
+  return texture;
+}
+
+// Depth of the surface at `pixel` from the measured depth around it: least-squares plane
+// 1/z = a (col - u) + b (row - v) + c over the valid pixels within `radius` (exact for planar
+// surfaces), evaluated at the pixel. std::nullopt with fewer than 10 valid pixels.
+std::optional<double> planeDepthAt(const cv::Mat& depth_mm, const Eigen::Vector2d& pixel,
+                                   double radius) {
+  const int r = static_cast<int>(std::ceil(radius));
+  const int cx = static_cast<int>(std::lround(pixel.x()));
+  const int cy = static_cast<int>(std::lround(pixel.y()));
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (int row = std::max(0, cy - r); row <= std::min(depth_mm.rows - 1, cy + r); ++row) {
+    for (int col = std::max(0, cx - r); col <= std::min(depth_mm.cols - 1, cx + r); ++col) {
+      const Eigen::Vector2d offset = Eigen::Vector2d(col, row) - pixel;
+      if (offset.norm() > radius) continue;
+      const std::uint16_t mm = depth_mm.at<std::uint16_t>(row, col);
+      if (mm == 0) continue;
+      const Eigen::Vector3d a(offset.x(), offset.y(), 1.0);
+      normal += a * a.transpose();
+      rhs += a * (1000.0 / mm);
+      ++count;
+    }
+  }
+  if (count < 10) return std::nullopt;
+  const Eigen::Vector3d solution = normal.ldlt().solve(rhs);
+  if (!solution.allFinite() || !(solution.z() > 0.0)) return std::nullopt;
+  return 1.0 / solution.z();
+}
+
+// Eq. 8.4 residual: depth-frame point -> eDVS pixel (eq. 8.1-8.2) minus the observed pixel.
+// Parameters: edvs_from_depth rotation (angle-axis) and translation [m]; eDVS intrinsics
+// (f, cx, cy, kappa1, kappa2).
+struct ReprojectionResidual {
+  Eigen::Vector3d point;  // depth optical frame [m] (eq. 8.3 of u, D)
+  Eigen::Vector2d observed;
+
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, const T* intrinsics, T* residual) const {
+    using std::sqrt;
+    const T p[3] = {T(point.x()), T(point.y()), T(point.z())};
+    T q[3];
+    ceres::AngleAxisRotatePoint(rotation, p, q);
+    for (int k = 0; k < 3; ++k) q[k] += translation[k];
+    if (!(q[2] > T(1e-6))) return false;
+    const T sx = intrinsics[0] * q[0] / q[2];
+    const T sy = intrinsics[0] * q[1] / q[2];
+    const T r2 = sx * sx + sy * sy;
+    const T r = r2 > T(0.0) ? T(sqrt(r2)) : T(0.0);
+    const T factor = T(1.0) + intrinsics[3] * r + intrinsics[4] * r2;
+    residual[0] = intrinsics[1] + sx / factor - T(observed.x());
+    residual[1] = intrinsics[2] + sy / factor - T(observed.y());
+    return true;
+  }
+};
+
+Eigen::Vector3d depthPoint(const PinholeCamera& depth, const Eigen::Vector2d& pixel,
+                           double depth_m) {
+  return depth_m *
+         Eigen::Vector3d((pixel.x() - depth.cx) / depth.fx, (pixel.y() - depth.cy) / depth.fy, 1.0);
+}
+
+}  // namespace
+
+void LedCalibrationRunConfig::validate() const {
+  simulator.validate();
+  require(std::isfinite(led_frequency_hz) && led_frequency_hz > 0.0 && led_frequency_hz <= 5000.0,
+          "LedCalibrationRunConfig: led_frequency_hz must lie in (0, 5000]");
+  require(std::isfinite(led_radius_m) && led_radius_m >= 0.0 && std::isfinite(led_on_intensity) &&
+              led_on_intensity > 0.0,
+          "LedCalibrationRunConfig: led_radius_m must be >= 0 and led_on_intensity > 0");
+  require(poses >= 2 && poses <= 100000, "LedCalibrationRunConfig: poses must lie in [2, 1e5]");
+  require(std::isfinite(move_s) && move_s > 0.0 && std::isfinite(rest_s) && rest_s > 0.0,
+          "LedCalibrationRunConfig: move_s and rest_s must be positive");
+  require(std::isfinite(min_depth_m) && min_depth_m > 0.0 && std::isfinite(max_depth_m) &&
+              max_depth_m >= min_depth_m,
+          "LedCalibrationRunConfig: need 0 < min_depth_m <= max_depth_m");
+  require(std::isfinite(max_tilt_deg) && max_tilt_deg >= 0.0 && max_tilt_deg < 80.0,
+          "LedCalibrationRunConfig: max_tilt_deg must lie in [0, 80)");
+  require(squares >= 1 && squares % 2 == 1 && squares <= 101,
+          "LedCalibrationRunConfig: squares must be odd, in [1, 101]");
+  require(std::isfinite(square_size_m) && square_size_m > 0.0,
+          "LedCalibrationRunConfig: square_size_m must be positive");
+  require(std::isfinite(border_margin_px) && border_margin_px >= 0.0 &&
+              2.0 * border_margin_px < simulator.edvs.width - 1 &&
+              2.0 * border_margin_px < simulator.edvs.height - 1,
+          "LedCalibrationRunConfig: border_margin_px must be >= 0 and leave part of the sensor");
+  require(std::isfinite(led_pixel_noise_px) && led_pixel_noise_px >= 0.0,
+          "LedCalibrationRunConfig: led_pixel_noise_px must be >= 0");
+  require(std::isfinite(depth_fit_radius_px) && depth_fit_radius_px >= 2.0,
+          "LedCalibrationRunConfig: depth_fit_radius_px must be >= 2");
+  require(outlier_event_fraction >= 0.0 && outlier_event_fraction <= 0.9,
+          "LedCalibrationRunConfig: outlier_event_fraction must lie in [0, 0.9]");
+}
+
+LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config) {
+  config.validate();
+  const DedvsSimulatorConfig& sim = config.simulator;
+  const DedvsSimulator simulator(sim);
+  std::mt19937_64 rng(config.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+
+  const double side = config.squares * config.square_size_m;
+  TexturedPlane plate;
+  plate.texture = checkerboard(config.squares);
+  plate.size_m = Eigen::Vector2d(side, side);
+  plate.metres_per_texel = config.square_size_m / 16.0;
+  plate.repeat = false;
+  Scene scene;
+  scene.planes.push_back(plate);
+  scene.background_intensity = 0.5;
+  const Eigen::Vector3d led_on_plate(0.5 * side, 0.5 * side, 0.0);  // centre of the middle square
+  BlinkingLed led;
+  led.position = led_on_plate;
+  led.plane_index = 0;
+  led.frequency_hz = config.led_frequency_hz;
+  led.radius_m = config.led_radius_m;
+  led.on_intensity = config.led_on_intensity;
+
+  // Plate poses (world = depth optical frame): the LED at a random eDVS pixel and depth, the
+  // plate facing the rig (its normal along -z) tilted about its x and y axes.
+  const CameraModel& edvs = sim.edvs;
+  const PinholeCamera& depth = sim.depth.camera;
+  const double m = config.border_margin_px;
+  auto insideDepth = [&](const Eigen::Vector2d& u) {
+    return u.x() >= m && u.y() >= m && u.x() <= depth.width - 1 - m &&
+           u.y() <= depth.height - 1 - m;
+  };
+  auto projectDepth = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector2d(depth.fx * p.x() / p.z() + depth.cx,
+                           depth.fy * p.y() / p.z() + depth.cy);
+  };
+  const double period_s = config.move_s + config.rest_s;
+  Trajectory plate_poses;
+  for (int k = 0; k < config.poses; ++k) {
+    Eigen::Vector3d led_depth;
+    for (int attempt = 0;; ++attempt) {
+      if (attempt > 10000) {
+        throw std::invalid_argument(
+            "simulateLedCalibrationRun: the eDVS and depth views do not overlap at these depths");
+      }
+      const Eigen::Vector2d v(m + unit(rng) * (edvs.width - 1 - 2 * m),
+                              m + unit(rng) * (edvs.height - 1 - 2 * m));
+      // Every other pose in the outer part of the image, where rotation and principal point
+      // differ most (and the distortion is largest).
+      const Eigen::Vector2d centre(0.5 * (edvs.width - 1), 0.5 * (edvs.height - 1));
+      if (k % 2 == 1 && (v - centre).norm() < 0.3 * (edvs.width + edvs.height) / 2.0) continue;
+      const double z = config.min_depth_m + unit(rng) * (config.max_depth_m - config.min_depth_m);
+      const std::optional<Eigen::Vector3d> ray = edvs.backprojectRay(v);
+      if (!ray) continue;
+      const Eigen::Vector3d ray_depth = sim.depth_from_edvs.linear() * *ray;
+      if (!(ray_depth.z() > 0.0)) continue;
+      const double lambda = (z - sim.depth_from_edvs.translation().z()) / ray_depth.z();
+      if (!(lambda > 0.0)) continue;
+      led_depth = sim.depth_from_edvs * (lambda * *ray);
+      if (insideDepth(projectDepth(led_depth))) break;
+    }
+    const double tilt = config.max_tilt_deg * kPi / 180.0;
+    const Eigen::Matrix3d rotation =
+        (Eigen::AngleAxisd((2.0 * unit(rng) - 1.0) * tilt, Eigen::Vector3d::UnitX()) *
+         Eigen::AngleAxisd((2.0 * unit(rng) - 1.0) * tilt, Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = rotation;
+    pose.translation() = led_depth - rotation * led_on_plate;
+    plate_poses.push_back(toStamped(k * period_s, pose));
+    plate_poses.push_back(toStamped(k * period_s + config.rest_s, pose));
+  }
+  const double duration = plate_poses.back().t_s;  // the last pose rests only
+  MovingPlane moving;
+  moving.plane_index = 0;
+  moving.pose = plate_poses;
+  Trajectory rig;  // the rig stands still at the world origin
+  rig.push_back(toStamped(0.0, Eigen::Isometry3d::Identity()));
+  rig.push_back(toStamped(duration, Eigen::Isometry3d::Identity()));
+
+  LedCalibrationRun run;
+  run.truth = sensorsOf(sim);
+  run.duration_s = duration;
+  std::vector<Event>& events = run.events;
+  std::vector<cv::Mat> frames;
+  std::vector<double> frame_times;
+  simulator.simulate(
+      scene, rig, 0.0, duration,
+      [&events](const std::vector<TrueDepthEvent>& batch) {
+        for (const TrueDepthEvent& e : batch) events.push_back(e.event);
+      },
+      [&](const DepthFrame& frame) {
+        frames.push_back(frame.depth_mm);
+        frame_times.push_back(frame.t_s);
+      },
+      {led}, {moving});
+
+  // The LED in the depth camera: its true pixel plus tracking noise, the depth from the
+  // measured plate surface around it.
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const Eigen::Vector3d point =
+        toIsometry(interpolatePose(plate_poses, frame_times[f])) * led_on_plate;
+    const double noise_x = gauss(rng), noise_y = gauss(rng);
+    if (!(point.z() > 0.0)) continue;
+    const Eigen::Vector2d pixel =
+        projectDepth(point) + config.led_pixel_noise_px * Eigen::Vector2d(noise_x, noise_y);
+    if (!insideDepth(pixel)) continue;
+    const std::optional<double> z = planeDepthAt(frames[f], pixel, config.depth_fit_radius_px);
+    if (!z) continue;
+    DepthLedObservation observation;
+    observation.t_s = frame_times[f];
+    observation.pixel = pixel;
+    observation.depth_m = *z;
+    observation.true_point = point;
+    run.depth_observations.push_back(observation);
+  }
+
+  // Outlier events: uniformly random pixel, polarity and time.
+  const double fraction = config.outlier_event_fraction;
+  run.outlier_events = static_cast<std::size_t>(
+      std::llround(static_cast<double>(events.size()) * fraction / (1.0 - fraction)));
+  const std::size_t simulated = events.size();
+  const double duration_us = duration * 1e6;
+  for (std::size_t k = 0; k < run.outlier_events; ++k) {
+    Event e;
+    e.t_us = static_cast<std::int64_t>(unit(rng) * duration_us);
+    e.x = static_cast<std::uint16_t>(std::min<double>(edvs.width - 1, unit(rng) * edvs.width));
+    e.y = static_cast<std::uint16_t>(std::min<double>(edvs.height - 1, unit(rng) * edvs.height));
+    e.polarity = unit(rng) < 0.5;
+    events.push_back(e);
+  }
+  std::sort(events.begin() + static_cast<std::ptrdiff_t>(simulated), events.end(),
+            [](const Event& a, const Event& b) { return a.t_us < b.t_us; });
+  std::inplace_merge(events.begin(), events.begin() + static_cast<std::ptrdiff_t>(simulated),
+                     events.end(), [](const Event& a, const Event& b) { return a.t_us < b.t_us; });
+  return run;
+}
+
+void LedExtractionConfig::validate() const {
+  require(std::isfinite(led_frequency_hz) && led_frequency_hz > 0.0,
+          "LedExtractionConfig: led_frequency_hz must be positive");
+  require(window_periods >= 2 && window_periods <= 32,
+          "LedExtractionConfig: window_periods must lie in [2, 32]");
+  require(min_cycle_fraction > 0.0 && min_cycle_fraction <= 1.0,
+          "LedExtractionConfig: min_cycle_fraction must lie in (0, 1]");
+  require(min_phase_coherence >= 0.0 && min_phase_coherence <= 1.0,
+          "LedExtractionConfig: min_phase_coherence must lie in [0, 1]");
+  require(std::isfinite(centroid_radius_px) && centroid_radius_px >= 0.0,
+          "LedExtractionConfig: centroid_radius_px must be >= 0");
+  require(min_spot_pixels >= 1, "LedExtractionConfig: min_spot_pixels must be >= 1");
+  require(std::isfinite(max_motion_px) && max_motion_px >= 0.0,
+          "LedExtractionConfig: max_motion_px must be >= 0");
+  require(min_weight_fraction >= 0.0 && min_weight_fraction <= 1.0,
+          "LedExtractionConfig: min_weight_fraction must lie in [0, 1]");
+  require(width > 0 && height > 0 && width <= 4096 && height <= 4096,
+          "LedExtractionConfig: width and height must lie in [1, 4096]");
+}
+
+std::optional<LedObservation> extractLed(const std::vector<Event>& events, double t_s,
+                                         const LedExtractionConfig& config) {
+  config.validate();
+  require(std::isfinite(t_s), "extractLed: t_s must be finite");
+  const double period_us = 1e6 / config.led_frequency_hz;
+  const double begin_us = t_s * 1e6 - 0.5 * config.window_periods * period_us;
+  const double end_us = begin_us + config.window_periods * period_us;
+  const auto first =
+      std::lower_bound(events.begin(), events.end(), begin_us,
+                       [](const Event& e, double t) { return static_cast<double>(e.t_us) < t; });
+
+  struct Cell {
+    std::uint32_t on = 0, off = 0;  // periods with an ON / OFF event (bit per period)
+    double re[2] = {0.0, 0.0};      // sum of p_k exp(-2 pi i f t_k), per half window
+    double im[2] = {0.0, 0.0};
+    int count = 0;
+  };
+  std::vector<Cell> cells(static_cast<std::size_t>(config.width) * config.height);
+  std::vector<std::size_t> touched;
+  const double omega = 2.0 * kPi / period_us;
+  for (auto it = first; it != events.end() && static_cast<double>(it->t_us) < end_us; ++it) {
+    if (it->x >= config.width || it->y >= config.height) continue;
+    const std::size_t i = static_cast<std::size_t>(it->y) * config.width + it->x;
+    Cell& cell = cells[i];
+    if (cell.count == 0) touched.push_back(i);
+    const double dt = static_cast<double>(it->t_us) - begin_us;
+    const int bin = std::min(config.window_periods - 1, static_cast<int>(dt / period_us));
+    const double sign = it->polarity ? 1.0 : -1.0;
+    (it->polarity ? cell.on : cell.off) |= 1u << bin;
+    const int h = bin < config.window_periods / 2 ? 0 : 1;
+    cell.re[h] += sign * std::cos(omega * dt);
+    cell.im[h] -= sign * std::sin(omega * dt);
+    ++cell.count;
+  }
+  // Cycles are counted per half window: a pixel the LED leaves or reaches halfway through the
+  // window (the plate starts or stops moving) does not qualify.
+  const int half = config.window_periods / 2;
+  const std::uint32_t first_half = (1u << half) - 1u;
+  const int min_cycles_first = static_cast<int>(std::ceil(config.min_cycle_fraction * half - 1e-9));
+  const int min_cycles_second = static_cast<int>(
+      std::ceil(config.min_cycle_fraction * (config.window_periods - half) - 1e-9));
+  auto popcount = [](std::uint32_t bits) {
+    int n = 0;
+    for (; bits != 0; bits &= bits - 1) ++n;
+    return n;
+  };
+  struct Weight {
+    std::size_t pixel;
+    double all, first, second;  // coherent event count: whole window, first and second half
+  };
+  std::vector<Weight> weights;
+  double best = 0.0;
+  std::size_t best_pixel = 0;
+  for (std::size_t i : touched) {
+    const Cell& cell = cells[i];
+    const std::uint32_t both = cell.on & cell.off;
+    if (popcount(both & first_half) < min_cycles_first ||
+        popcount(both & ~first_half) < min_cycles_second) {
+      continue;
+    }
+    const double magnitude = std::hypot(cell.re[0] + cell.re[1], cell.im[0] + cell.im[1]);
+    if (magnitude < config.min_phase_coherence * cell.count) continue;
+    weights.push_back(
+        {i, magnitude, std::hypot(cell.re[0], cell.im[0]), std::hypot(cell.re[1], cell.im[1])});
+    if (magnitude > best) {
+      best = magnitude;
+      best_pixel = i;
+    }
+  }
+  if (weights.empty()) return std::nullopt;
+  // Weighted centroid of the LED pixels near the strongest one, then again around that
+  // centroid (the strongest pixel need not be the spot's centre when the response saturates).
+  LedObservation observation;
+  Eigen::Vector2d centre(static_cast<double>(best_pixel % config.width),
+                         static_cast<double>(best_pixel / config.width));
+  Eigen::Vector2d half_sum[2] = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  double half_total[2] = {0.0, 0.0};
+  for (int pass = 0; pass < 2; ++pass) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double total = 0.0;
+    observation.pixels = 0;
+    for (const Weight& w : weights) {
+      const Eigen::Vector2d pixel(static_cast<double>(w.pixel % config.width),
+                                  static_cast<double>(w.pixel / config.width));
+      if ((pixel - centre).norm() > config.centroid_radius_px ||
+          w.all < config.min_weight_fraction * best) {
+        continue;
+      }
+      sum += w.all * pixel;
+      total += w.all;
+      ++observation.pixels;
+      if (pass == 1) {
+        // A spot cut by the sensor's border has a biased centroid.
+        if (pixel.x() == 0.0 || pixel.y() == 0.0 || pixel.x() == config.width - 1 ||
+            pixel.y() == config.height - 1) {
+          return std::nullopt;
+        }
+        half_sum[0] += w.first * pixel;
+        half_total[0] += w.first;
+        half_sum[1] += w.second * pixel;
+        half_total[1] += w.second;
+      }
+    }
+    centre = sum / total;
+  }
+  if (observation.pixels < config.min_spot_pixels) return std::nullopt;
+  // The LED must rest during the window: the centroids of its two halves agree.
+  if (!(half_total[0] > 0.0 && half_total[1] > 0.0) ||
+      (half_sum[0] / half_total[0] - half_sum[1] / half_total[1]).norm() > config.max_motion_px) {
+    return std::nullopt;
+  }
+  observation.t_s = t_s;
+  observation.pixel = centre;
+  observation.score = best;
+  return observation;
+}
+
+std::vector<LedCorrespondence> collectLedCorrespondences(
+    const std::vector<Event>& events, const std::vector<DepthLedObservation>& depth_observations,
+    const LedExtractionConfig& config) {
+  config.validate();
+  std::vector<LedCorrespondence> result;
+  for (const DepthLedObservation& depth : depth_observations) {
+    const std::optional<LedObservation> led = extractLed(events, depth.t_s, config);
+    if (!led) continue;
+    LedCorrespondence c;
+    c.depth_pixel = depth.pixel;
+    c.depth_m = depth.depth_m;
+    c.edvs_pixel = led->pixel;
+    result.push_back(c);
+  }
+  return result;
+}
+
+CameraModel DedvsCalibrationConfig::defaultInitialEdvs() {
+  CameraModel camera;
+  camera.width = 128;
+  camera.height = 128;
+  camera.focal_px = 160.0;
+  camera.principal_point =
+      Eigen::Vector2d(63.5, 63.5);  // eq. 8.6's (64, 64), pixel centres at integers
+  camera.kappa1 = 0.0;
+  camera.kappa2 = 0.0;
+  camera.distortion_model = DistortionModel::kDivideEq81;
+  return camera;
+}
+
+void DedvsCalibrationConfig::validate() const {
+  initial_edvs.validate();
+  require(initial_edvs.distortion_model == DistortionModel::kDivideEq81,
+          "DedvsCalibrationConfig: the initial eDVS camera must use the eq. 8.1 model");
+  const Eigen::Matrix3d r = initial_depth_from_edvs.linear();
+  require(initial_depth_from_edvs.matrix().allFinite() &&
+              (r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-6,
+          "DedvsCalibrationConfig: initial_depth_from_edvs must be a finite rigid transform");
+  require(std::isfinite(coarse_loss_scale_px) && coarse_loss_scale_px > 0.0 &&
+              std::isfinite(loss_scale_px) && loss_scale_px > 0.0,
+          "DedvsCalibrationConfig: loss scales must be positive");
+  require(std::isfinite(outlier_sigmas) && outlier_sigmas >= 0.0,
+          "DedvsCalibrationConfig: outlier_sigmas must be >= 0");
+  require(std::isfinite(inlier_threshold_px) && inlier_threshold_px > 0.0,
+          "DedvsCalibrationConfig: inlier_threshold_px must be positive");
+  require(max_iterations >= 1, "DedvsCalibrationConfig: max_iterations must be >= 1");
+  require(min_correspondences >= 6, "DedvsCalibrationConfig: min_correspondences must be >= 6");
+  require(min_inlier_fraction >= 0.0 && min_inlier_fraction <= 1.0,
+          "DedvsCalibrationConfig: min_inlier_fraction must lie in [0, 1]");
+  require(std::isfinite(max_rmse_px) && max_rmse_px > 0.0,
+          "DedvsCalibrationConfig: max_rmse_px must be positive");
+}
+
+const char* toString(CalibrationStatus status) {
+  switch (status) {
+    case CalibrationStatus::kOk:
+      return "ok";
+    case CalibrationStatus::kNotConverged:
+      return "not converged";
+    case CalibrationStatus::kTooFewInliers:
+      return "too few inliers";
+    case CalibrationStatus::kHighError:
+      return "reprojection error too high";
+    case CalibrationStatus::kInvalidCamera:
+      return "fitted distortion not invertible";
+  }
+  return "unknown";
+}
+
+DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& correspondences,
+                                      const DedvsSensors& base,
+                                      const DedvsCalibrationConfig& config) {
+  config.validate();
+  base.depth.validate();
+  require(correspondences.size() >= config.min_correspondences,
+          "calibrateDedvs: " + std::to_string(correspondences.size()) +
+              " correspondences, fewer than min_correspondences = " +
+              std::to_string(config.min_correspondences));
+  for (const LedCorrespondence& c : correspondences) {
+    require(c.depth_pixel.allFinite() && c.edvs_pixel.allFinite() && std::isfinite(c.depth_m) &&
+                c.depth_m > 0.0,
+            "calibrateDedvs: a correspondence is not finite or has depth <= 0");
+  }
+
+  // Eq. 8.4 parameters: edvs_from_depth and the eDVS intrinsics, initial values eq. 8.6.
+  const Eigen::Isometry3d initial = config.initial_depth_from_edvs.inverse();
+  const Eigen::AngleAxisd initial_rotation(initial.linear());
+  const Eigen::Vector3d rotation_vector = initial_rotation.angle() * initial_rotation.axis();
+  double rotation[3] = {rotation_vector.x(), rotation_vector.y(), rotation_vector.z()};
+  double translation[3] = {initial.translation().x(), initial.translation().y(),
+                           initial.translation().z()};
+  double intrinsics[5] = {config.initial_edvs.focal_px, config.initial_edvs.principal_point.x(),
+                          config.initial_edvs.principal_point.y(), config.initial_edvs.kappa1,
+                          config.initial_edvs.kappa2};
+
+  std::vector<ReprojectionResidual> residuals;
+  residuals.reserve(correspondences.size());
+  for (const LedCorrespondence& c : correspondences) {
+    residuals.push_back({depthPoint(base.depth, c.depth_pixel, c.depth_m), c.edvs_pixel});
+  }
+
+  DedvsCalibrationResult result;
+  bool converged = true;
+  auto residualOf = [&](const ReprojectionResidual& residual) {
+    double r[2] = {0.0, 0.0};
+    return residual(rotation, translation, intrinsics, r) ? std::hypot(r[0], r[1])
+                                                          : std::numeric_limits<double>::infinity();
+  };
+  std::vector<bool> used(residuals.size(), true);
+  double inlier_threshold = config.inlier_threshold_px;
+  for (int stage = 0; stage < 3; ++stage) {
+    if (stage == 2) {
+      // Trim: drop correspondences beyond outlier_sigmas robust standard deviations (1.4826 x
+      // the median residual) and solve once more on the rest.
+      if (config.outlier_sigmas <= 0.0) break;
+      std::vector<double> errors;
+      for (const ReprojectionResidual& residual : residuals) errors.push_back(residualOf(residual));
+      std::vector<double> sorted = errors;
+      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+      const double sigma = 1.4826 * sorted[sorted.size() / 2];
+      inlier_threshold = std::min(config.inlier_threshold_px, config.outlier_sigmas * sigma);
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < errors.size(); ++i) {
+        used[i] = errors[i] < inlier_threshold;
+        kept += used[i] ? 1 : 0;
+      }
+      if (kept < config.min_correspondences) {
+        inlier_threshold = config.inlier_threshold_px;
+        break;
+      }
+    }
+    ceres::Problem problem;
+    for (std::size_t i = 0; i < residuals.size(); ++i) {
+      if (!used[i]) continue;
+      const ReprojectionResidual& residual = residuals[i];
+      // The problem takes ownership of the cost and loss functions.
+      std::unique_ptr<ceres::LossFunction> loss;
+      if (stage == 0) {
+        loss = std::make_unique<ceres::HuberLoss>(config.coarse_loss_scale_px);
+      } else {
+        loss = std::make_unique<ceres::CauchyLoss>(config.loss_scale_px);
+      }
+      auto cost = std::make_unique<ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 3, 3, 5>>(
+          std::make_unique<ReprojectionResidual>(residual).release());
+      problem.AddResidualBlock(cost.release(), loss.release(), rotation, translation, intrinsics);
+    }
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::DENSE_QR;
+    options.minimizer_type = ceres::TRUST_REGION;
+    options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    options.max_num_iterations = config.max_iterations;
+    options.logging_type = ceres::SILENT;
+    options.minimizer_progress_to_stdout = false;
+    options.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    result.iterations += static_cast<int>(summary.iterations.size());
+    if (stage >= 1) converged = summary.termination_type == ceres::CONVERGENCE;
+    if (summary.termination_type == ceres::FAILURE) converged = false;
+  }
+
+  // Result.
+  const Eigen::Vector3d fitted_rotation(rotation[0], rotation[1], rotation[2]);
+  Eigen::Isometry3d edvs_from_depth = Eigen::Isometry3d::Identity();
+  if (fitted_rotation.norm() > 0.0) {
+    edvs_from_depth.linear() =
+        Eigen::AngleAxisd(fitted_rotation.norm(), fitted_rotation.normalized()).toRotationMatrix();
+  }
+  edvs_from_depth.translation() = Eigen::Vector3d(translation[0], translation[1], translation[2]);
+  result.sensors = base;
+  result.sensors.depth_from_edvs = edvs_from_depth.inverse();
+  CameraModel& edvs = result.sensors.edvs;
+  edvs = config.initial_edvs;
+  edvs.width = base.edvs.width;
+  edvs.height = base.edvs.height;
+  edvs.focal_px = intrinsics[0];
+  edvs.principal_point = Eigen::Vector2d(intrinsics[1], intrinsics[2]);
+  edvs.kappa1 = intrinsics[3];
+  edvs.kappa2 = intrinsics[4];
+
+  double sum_all = 0.0, sum_inliers = 0.0;
+  for (const ReprojectionResidual& residual : residuals) {
+    const double error = residualOf(residual);
+    result.residuals_px.push_back(error);
+    sum_all += error * error;
+    if (error < inlier_threshold) {
+      sum_inliers += error * error;
+      ++result.inliers;
+    }
+  }
+  result.rmse_all_px = std::sqrt(sum_all / static_cast<double>(residuals.size()));
+  result.rmse_px = result.inliers > 0 ? std::sqrt(sum_inliers / static_cast<double>(result.inliers))
+                                      : std::numeric_limits<double>::infinity();
+
+  bool valid_camera = true;
+  try {
+    edvs.validate();
+  } catch (const std::invalid_argument&) {
+    valid_camera = false;
+  }
+  if (!converged) {
+    result.status = CalibrationStatus::kNotConverged;
+  } else if (!valid_camera) {
+    result.status = CalibrationStatus::kInvalidCamera;
+  } else if (static_cast<double>(result.inliers) <
+             config.min_inlier_fraction * static_cast<double>(residuals.size())) {
+    result.status = CalibrationStatus::kTooFewInliers;
+  } else if (!(result.rmse_px <= config.max_rmse_px)) {
+    result.status = CalibrationStatus::kHighError;
+  }
+  return result;
+}
+
+std::optional<Eigen::Vector2d> depthToEdvsPixel(const DedvsSensors& sensors,
+                                                const Eigen::Vector2d& depth_pixel,
+                                                double depth_m) {
+  const Eigen::Vector3d point = depthPoint(sensors.depth, depth_pixel, depth_m);
+  return sensors.edvs.project(sensors.depth_from_edvs.inverse() * point);
+}
+
+ExtrinsicError extrinsicError(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
+  ExtrinsicError error;
+  error.translation_mm = 1000.0 * (estimate.translation() - truth.translation()).norm();
+  const Eigen::Matrix3d difference = estimate.linear().transpose() * truth.linear();
+  error.rotation_deg = Eigen::AngleAxisd(difference).angle() * 180.0 / kPi;
+  return error;
+}
+
+}  // namespace ebslam
