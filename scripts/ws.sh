@@ -27,11 +27,14 @@ configure() {
 build() {
   configure
   cd "${ws}"
-  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --summarize
+  # Explicit statuses: `set -e` does not apply inside a function called as an `if` condition.
+  local status=0
+  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --summarize || status=1
   # catkin packages build their gtest/rostest executables only in the `tests` target.
-  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --catkin-make-args tests
+  catkin build -j "${jobs}" --no-status --no-notify --continue-on-failure --catkin-make-args tests || status=1
   # One compile_commands.json for clang-tidy and editors.
-  /usr/bin/python3 "${repo}/scripts/merge_compile_commands.py" "${ws}/build" "${repo}/compile_commands.json"
+  /usr/bin/python3 "${repo}/scripts/merge_compile_commands.py" "${ws}/build" "${repo}/compile_commands.json" || status=1
+  return "${status}"
 }
 
 package_build_type() {

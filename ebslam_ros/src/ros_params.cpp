@@ -581,6 +581,47 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   requirePositive(c.speed, nh, "speed");
   c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
   requirePositive(c.publish_rate_hz, nh, "publish_rate");
+  c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
+  c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
+  requirePositive(c.clock_start_s, nh, "clock_start");
+  c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  const int seed = param<int>(nh, "seed", static_cast<int>(c.simulator.seed));
+  if (seed < 0) fail(nh, "seed", "must not be negative");
+  c.simulator.seed = c.simulator.events.seed = c.room.seed = static_cast<std::uint64_t>(seed);
+  const int depth_width = param<int>(nh, "depth_width", c.simulator.depth.camera.width);
+  if (depth_width != 320 && depth_width != 640) fail(nh, "depth_width", "must be 320 or 640");
+  c.simulator.depth.camera = c.simulator.depth.camera.scaled(
+      depth_width / static_cast<double>(c.simulator.depth.camera.width));
+  c.room.texture_contrast = param<double>(nh, "texture_contrast", c.room.texture_contrast);
+  c.simulator.events.noise_rate_hz_per_pixel =
+      param<double>(nh, "noise_rate", c.simulator.events.noise_rate_hz_per_pixel);
+  c.simulator.depth.frame_rate_hz =
+      param<double>(nh, "depth_rate", c.simulator.depth.frame_rate_hz);
+  requirePositive(c.simulator.depth.frame_rate_hz, nh, "depth_rate");
+  c.simulator.depth.clock_offset_s =
+      param<double>(nh, "depth_clock_offset", c.simulator.depth.clock_offset_s);
+  if (!std::isfinite(c.simulator.depth.clock_offset_s) ||
+      std::abs(c.simulator.depth.clock_offset_s) > 1.0) {
+    fail(nh, "depth_clock_offset", "must be a number of seconds in [-1, 1]");
+  }
+  c.edvs_frame = param<std::string>(nh, "edvs_frame", c.edvs_frame);
+  c.depth_frame = param<std::string>(nh, "depth_frame", c.depth_frame);
+  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
+  c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
+  requireFrame(nh, "edvs_frame", c.edvs_frame);
+  requireFrame(nh, "depth_frame", c.depth_frame);
+  requireFrame(nh, "map_frame", c.map_frame);
+  requireFrame(nh, "ground_truth_frame", c.ground_truth_frame);
+  if (c.map_frame == c.ground_truth_frame)
+    fail(nh, "ground_truth_frame", "must differ from ~map_frame");
+  c.path_length = param<int>(nh, "path_length", c.path_length);
+  if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
+  c.write_calibration = param<std::string>(nh, "write_calibration", c.write_calibration);
+  validateCore(nh, c.room);
+  validateCore(nh, c.simulator);
+  return c;
+}
+
 ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
   ExplorationNodeConfig c;
   ebslam::ExplorationConfig& e = c.exploration;
@@ -661,40 +702,6 @@ ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
-  const int seed = param<int>(nh, "seed", static_cast<int>(c.simulator.seed));
-  if (seed < 0) fail(nh, "seed", "must not be negative");
-  c.simulator.seed = c.simulator.events.seed = c.room.seed = static_cast<std::uint64_t>(seed);
-  const int depth_width = param<int>(nh, "depth_width", c.simulator.depth.camera.width);
-  if (depth_width != 320 && depth_width != 640) fail(nh, "depth_width", "must be 320 or 640");
-  c.simulator.depth.camera = c.simulator.depth.camera.scaled(
-      depth_width / static_cast<double>(c.simulator.depth.camera.width));
-  c.room.texture_contrast = param<double>(nh, "texture_contrast", c.room.texture_contrast);
-  c.simulator.events.noise_rate_hz_per_pixel =
-      param<double>(nh, "noise_rate", c.simulator.events.noise_rate_hz_per_pixel);
-  c.simulator.depth.frame_rate_hz =
-      param<double>(nh, "depth_rate", c.simulator.depth.frame_rate_hz);
-  requirePositive(c.simulator.depth.frame_rate_hz, nh, "depth_rate");
-  c.simulator.depth.clock_offset_s =
-      param<double>(nh, "depth_clock_offset", c.simulator.depth.clock_offset_s);
-  if (!std::isfinite(c.simulator.depth.clock_offset_s) ||
-      std::abs(c.simulator.depth.clock_offset_s) > 1.0) {
-    fail(nh, "depth_clock_offset", "must be a number of seconds in [-1, 1]");
-  }
-  c.edvs_frame = param<std::string>(nh, "edvs_frame", c.edvs_frame);
-  c.depth_frame = param<std::string>(nh, "depth_frame", c.depth_frame);
-  c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
-  c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
-  requireFrame(nh, "edvs_frame", c.edvs_frame);
-  requireFrame(nh, "depth_frame", c.depth_frame);
-  requireFrame(nh, "map_frame", c.map_frame);
-  requireFrame(nh, "ground_truth_frame", c.ground_truth_frame);
-  if (c.map_frame == c.ground_truth_frame)
-    fail(nh, "ground_truth_frame", "must differ from ~map_frame");
-  c.path_length = param<int>(nh, "path_length", c.path_length);
-  if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
-  c.write_calibration = param<std::string>(nh, "write_calibration", c.write_calibration);
-  validateCore(nh, c.room);
-  validateCore(nh, c.simulator);
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.base_frame = param<std::string>(nh, "base_frame", c.base_frame);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
