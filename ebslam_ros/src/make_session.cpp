@@ -19,6 +19,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_msgs/TFMessage.h>
@@ -28,6 +29,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -220,9 +222,11 @@ void writeSession(const SessionOptions& options) {
   config.events.seed = options.seed;
   const ebslam::DedvsSimulator simulator(config);
 
-  rosbag::Bag bag(options.output, rosbag::bagmode::Write);
-  if (options.compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
-  if (options.compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
+  // Written topic by topic into an uncompressed bag first, then copied in time order: rosbag
+  // keeps one decompressed chunk, so a bag whose chunks each hold one topic decompresses a whole
+  // chunk for nearly every message it plays (bz2: playback several times slower than real time).
+  const std::string unordered_path = options.output + ".unordered";
+  rosbag::Bag bag(unordered_path, rosbag::bagmode::Write);
 
   // Simulated time t [us] is recorded at ROS time clock_origin_s + t.
   ebslam::EventClock clock;
@@ -333,6 +337,16 @@ void writeSession(const SessionOptions& options) {
     ++ground_truth_poses;
   }
   bag.close();
+  {
+    rosbag::Bag unordered(unordered_path, rosbag::bagmode::Read);
+    rosbag::Bag ordered(options.output, rosbag::bagmode::Write);
+    if (options.compression == "bz2") ordered.setCompression(rosbag::compression::BZ2);
+    if (options.compression == "lz4") ordered.setCompression(rosbag::compression::LZ4);
+    for (const rosbag::MessageInstance& m : rosbag::View(unordered)) {
+      ordered.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+    }
+  }
+  std::filesystem::remove(unordered_path);
   std::printf(
       "session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu RGB-D frames "
       "%dx%d, %zu ground-truth poses, %zu scene planes\n",
