@@ -53,10 +53,21 @@ if command -v Xvfb >/dev/null && command -v rviz >/dev/null && [ -x /usr/bin/imp
   Xvfb "${display}" -screen 0 1280x800x24 +extension GLX >"${out}/logs/xvfb.log" 2>&1 &
   xvfb_pid=$!
   rviz_arg=true
-  (sleep 14 && DISPLAY="${display}" /usr/bin/import -window root "${pb}/rviz.png" >/dev/null 2>&1) &
+  # A capture every second while the launch runs; the last one that shows rviz (not one flat colour:
+  # rviz not up yet, or closed) is kept, so the picture is from near the end of the bag whatever
+  # the machine's speed.
+  (for _ in $(seq 1 300); do
+     sleep 1
+     DISPLAY="${display}" /usr/bin/import -window root "${pb}/rviz_capture.png" >/dev/null 2>&1 || continue
+     if [ "$(/usr/bin/convert "${pb}/rviz_capture.png" -format '%[fx:standard_deviation>0.02]' info: 2>/dev/null)" = 1 ]; then
+       mv -f "${pb}/rviz_capture.png" "${pb}/rviz.png"
+     fi
+   done) &
+  capture_pid=$!
 fi
 if DISPLAY="${display:-}" LIBGL_ALWAYS_SOFTWARE=1 roslaunch -p "${port}" "${repo}/launch/demo_playback.launch" \
   output_dir:="${pb}" rviz:="${rviz_arg}" </dev/null >"${out}/logs/playback_roslaunch.log" 2>&1 &&
+  { [ -z "${capture_pid:-}" ] || kill "${capture_pid}" 2>/dev/null || true; rm -f "${pb}/rviz_capture.png"; } &&
   /usr/bin/python3 "${repo}/scripts/demo_outputs.py" "${pb}/demo.bag" "${pb}" >"${pb}/topics_summary.txt"; then
   ebslam_evaluate_trajectory --no-time-offset "${pb}/trajectory.tum" "${pb}/ground_truth.tum" >"${pb}/trajectory_eval.txt" 2>&1 || status=1
   note "  playback of test/data/session/session.bag (outputs in demo_output/playback):"
@@ -67,6 +78,7 @@ else
   note "  playback: FAILED (see demo_output/logs/playback_roslaunch.log)"
   status=1
 fi
+[ -n "${capture_pid:-}" ] && kill "${capture_pid}" 2>/dev/null || true
 [ -n "${xvfb_pid}" ] && kill "${xvfb_pid}" 2>/dev/null || true
 wait 2>/dev/null || true
 
