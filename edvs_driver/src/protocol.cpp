@@ -301,7 +301,9 @@ void EventParser::restart() {
   chain_mode_ = false;
   held_.clear();
   held_host_.clear();
+  held_after_.clear();
   held_idle_.clear();
+  previous_read_host_ = kNoHost;
   have_last_ = false;
   have_latency_ = false;
   behind_debt_us_ = 0;
@@ -346,6 +348,7 @@ EventParser::FrameRef EventParser::frameAt(std::size_t pos) const {
   for (std::size_t k = 2; k < size; ++k) raw = (raw << 8) | held_[pos + k];
   f.raw = static_cast<std::int64_t>(raw);
   f.host_us = held_host_[pos + size - 1];  // the read that completed the frame
+  f.arrived_after_us = held_after_[pos];
   f.idle_epoch = held_idle_[pos + size - 1];
   return f;
 }
@@ -377,8 +380,16 @@ EventParser::Link EventParser::link(const FrameRef& a, const FrameRef& b) const 
   // A step longer than the host clock allows is a framing error, not time.
   // Without host time (a capture) only the order is known: a step of half a period or more
   // could as well be a step back.
-  l.ok = host_elapsed >= 0 ? step <= host_elapsed + tolerance() : step < period / 2;
+  l.ok = host_elapsed >= 0 ? step <= hostSpan(a, b.host_us) + tolerance() : step < period / 2;
   return l;
+}
+
+std::int64_t EventParser::hostSpan(const FrameRef& a, std::int64_t later_host_us) {
+  // Device time from a to a later frame is at most the host time from a's arrival to the later
+  // read. a arrived after the read before its own: a reader that woke late and drained a
+  // backlog of many milliseconds in one read holds device time that its read times do not show.
+  const std::int64_t from = a.arrived_after_us != kNoHost ? a.arrived_after_us : a.host_us;
+  return std::max<std::int64_t>(0, later_host_us - from);
 }
 
 std::int64_t EventParser::tolerance() const {
@@ -471,7 +482,7 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
       if (!l.ok) continue;
       const std::int64_t advance = l.step_us + chain_advance_[q];
       if (a.host_us != kNoHost && chain_end_host_[q] != kNoHost &&
-          advance > std::max<std::int64_t>(0, chain_end_host_[q] - a.host_us) + tolerance()) {
+          advance > hostSpan(a, chain_end_host_[q]) + tolerance()) {
         continue;
       }
       best_score = score;
@@ -612,6 +623,7 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
   }
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(pos));
   held_host_.erase(held_host_.begin(), held_host_.begin() + static_cast<std::ptrdiff_t>(pos));
+  held_after_.erase(held_after_.begin(), held_after_.begin() + static_cast<std::ptrdiff_t>(pos));
   held_idle_.erase(held_idle_.begin(), held_idle_.begin() + static_cast<std::ptrdiff_t>(pos));
 }
 
@@ -695,6 +707,8 @@ std::size_t EventParser::feed(const std::uint8_t* data, std::size_t size,
   if (chain_mode_) {
     held_.insert(held_.end(), data, data + size);
     held_host_.insert(held_host_.end(), size, host_us ? *host_us : kNoHost);
+    held_after_.insert(held_after_.end(), size, previous_read_host_);
+    if (host_us && size > 0) previous_read_host_ = *host_us;
     held_idle_.insert(held_idle_.end(), size, idle_epoch_);
     decideAbsolute(false, out);
     return out.size() - before;

@@ -232,9 +232,10 @@ class TimestampUnwrapper {
 /// Absolute-timestamp formats (kAbs16/24/32) fed with host times (a live device; a capture
 /// parsed without read times keeps the byte-by-byte framing) are framed by evidence: a frame
 /// (a byte with the top bit set and the bytes after it) becomes an event only when it follows
-/// the last published event by a forward step the host clock allows (host time between the
-/// reads plus ParserConfig::jump_tolerance_us, at most a quarter period; without host time a
-/// quarter period) and config().confirm_events frames after it, with at most max_gap_bytes of
+/// the last published event by a forward step the host clock allows (host time from the read
+/// before the one that brought the earlier frame to the read of the later one, so that a read
+/// that drained a backlog does not cut the stream, plus ParserConfig::jump_tolerance_us, at
+/// most a quarter period; without host time a quarter period) and config().confirm_events frames after it, with at most max_gap_bytes of
 /// garbage between them, chain on with such steps. Of the frames starting near the current
 /// position, the one with the longest chain wins; the bytes before it are dropped and a refused
 /// frame costs only its first byte, so an event that garbage overlapped is found again. Garbage
@@ -302,6 +303,9 @@ class EventParser {
   struct FrameRef {
     std::int64_t raw = 0;
     std::int64_t host_us = 0;  // kNoHost if unknown
+    // Host time of the read before the one that brought the frame's first byte: the byte
+    // arrived after it (reads drain the line). kNoHost for the first read.
+    std::int64_t arrived_after_us = 0;
     std::uint32_t idle_epoch = 0;
   };
   static constexpr std::int64_t kNoHost = INT64_MIN;
@@ -311,12 +315,14 @@ class EventParser {
   Link link(const FrameRef& a, const FrameRef& b) const;
   Link linkFromLast(std::size_t pos) const;  // pos: a valid frame decoded into frames_
   std::int64_t tolerance() const;
+  static std::int64_t hostSpan(const FrameRef& a, std::int64_t later_host_us);
   void publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
                     ebslam::EventVector& out);
   void decideAbsolute(bool flushing, ebslam::EventVector& out);
 
   std::vector<std::uint8_t> held_;         // bytes after the last published event
   std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
+  std::vector<std::int64_t> held_after_;   // host time of the read before that one (kNoHost)
   std::vector<std::uint32_t> held_idle_;   // idle epoch at the arrival of each held byte
   std::vector<FrameRef> frames_;           // per held position: the frame starting there (if valid)
   std::vector<int> chain_length_;          // per held position: frames in its best chain
@@ -325,6 +331,7 @@ class EventParser {
   std::vector<std::int64_t> chain_advance_;   // per held position: device time its chain spans
   std::vector<std::int64_t> chain_end_host_;  // per held position: host time of its chain's end
   std::uint32_t idle_epoch_ = 0;
+  std::int64_t previous_read_host_ = kNoHost;
   bool mode_decided_ = false;  // set by the first bytes fed
   bool chain_mode_ = false;    // absolute format fed with host times: framing by evidence
   bool have_last_ = false;
