@@ -235,14 +235,14 @@ class TimestampUnwrapper {
 /// the last published event by a forward step the host clock allows (host time from the read
 /// before the one that brought the earlier frame to the read of the later one, so that a read
 /// that drained a backlog does not cut the stream, plus ParserConfig::jump_tolerance_us, at
-/// most a quarter period; without host time a quarter period) and config().confirm_events frames after it, with at most max_gap_bytes of
-/// garbage between them, chain on with such steps. Of the frames starting near the current
-/// position, the one with the longest chain wins; the bytes before it are dropped and a refused
-/// frame costs only its first byte, so an event that garbage overlapped is found again. Garbage
-/// can then only pass as an event when its time lies between two true neighbours, so the clock
-/// never runs ahead of the stream by more than one inter-event gap and never gains a wrap
-/// period from garbage. The last confirm_events events of a read wait for the next read or for
-/// flush().
+/// most a quarter period; without host time a quarter period) and config().confirm_events frames
+/// after it, with at most max_gap_bytes of garbage between them, chain on with such steps. Of the
+/// frames starting near the current position, the one with the longest chain wins; the bytes before
+/// it are dropped and a refused frame costs only its first byte, so an event that garbage
+/// overlapped is found again. Garbage can then only pass as an event when its time lies between two
+/// true neighbours, so the clock never runs ahead of the stream by more than one inter-event gap
+/// and never gains a wrap period from garbage. The last confirm_events events of a read wait for
+/// the next read or for flush().
 class EventParser {
  public:
   explicit EventParser(const ParserConfig& config = {});
