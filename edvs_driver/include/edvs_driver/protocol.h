@@ -2,22 +2,10 @@
 
 // eDVS4337 serial protocol: command builder, event formats, incremental parser with resync and
 // 64-bit timestamp unwrapping. ROS-free; depends only on ebslam/event.h.
-//
-// Wire format of one event (eDVS4337 firmware manual, public drivers):
-//   byte 0: 1yyyyyyy   (top bit set: start of an event; y = row 0..127)
-//   byte 1: pxxxxxxx   (p = polarity bit, x = column 0..127)
-//   then, depending on the selected format:
-//     kNone     nothing
-//     kDelta    1..4 bytes of 7 bits each, most significant group first; the last byte has its
-//               top bit set: microseconds since the previous event
-//     kAbs16    big-endian 16-bit device time [us], wraps every 65.536 ms
-//     kAbs24    big-endian 24-bit device time [us], wraps every 16.78 s
-//     kAbs32    big-endian 32-bit device time [us], wraps every 71.6 min
-//
-// Polarity convention of this driver: p = 1 is ON (brightness increased), p = 0 is OFF, the
-// same bit-to-value mapping as edvstools (the thesis author's driver, which copies the bit into
-// its `parity` field). Other public drivers read the bit the other way round; a sensor whose
-// polarities come out swapped is handled by ParserConfig::on_bit = 0.
+// One event on the wire: 1yyyyyyy pxxxxxxx, then the format's time field (none, 1-4 delta bytes,
+// or a big-endian 16/24/32-bit device time in us). p = 1 is ON (ParserConfig::on_bit swaps it).
+// Byte layouts, wrap periods and the polarity convention: edvs_driver/README.md, "Event formats
+// and robustness" and "Polarity convention".
 
 #include <climits>
 #include <cstddef>
@@ -166,15 +154,10 @@ struct ParserStats {
 /// rejected events, implausible jumps): a change means garbage arrived.
 std::uint64_t noiseCount(const ParserStats& stats);
 
-/// Unwraps an N-bit device clock to 64-bit microseconds that never run backwards.
-///
-/// Each raw value is taken as the smallest forward step from the previous one (modulo the wrap
-/// period). A gap longer than one wrap period cannot be seen in the raw values; when the host
-/// time at which the bytes arrived is known AND the line was seen idle in between (noteIdle()),
-/// whole periods that must have passed are added back (host elapsed time minus device step,
-/// rounded down to whole periods with 1/8 period of slack). The idle condition matters: while the
-/// line is busy (a backlog held back by flow control or a slow reader) host time says nothing about
-/// device time.
+/// Unwraps an N-bit device clock to 64-bit microseconds that never run backwards: each raw value
+/// is the smallest forward step from the previous one (modulo the wrap period). Whole periods a
+/// quiet gap hid are added back from host time, but only when the line was seen idle in between
+/// (noteIdle()): while a backlog is read, host time says nothing about device time.
 class TimestampUnwrapper {
  public:
   /// period_us: wrap period (2^bits) [us]; 0 means the input is already a 64-bit time.
@@ -220,29 +203,13 @@ class TimestampUnwrapper {
   std::uint64_t wraps_from_host_ = 0;
 };
 
-/// Incremental parser of the eDVS event stream.
-///
-/// feed() accepts the bytes of each read as they come; an event split across reads is kept
-/// until its last byte arrives, so no event is ever split or shifted. A byte where the start
-/// of an event is expected whose top bit is clear (text, line noise, a lost byte) is dropped and
-/// counted; parsing resumes at the next byte with the top bit set. Timestamps are unwrapped to
-/// 64-bit device microseconds that never run backwards. For kNone (no device timestamps) the
-/// event time is the host receive time passed to feed(), clamped so it never runs backwards.
-///
-/// Absolute-timestamp formats (kAbs16/24/32) fed with host times (a live device; a capture
-/// parsed without read times keeps the byte-by-byte framing) are framed by evidence: a frame
-/// (a byte with the top bit set and the bytes after it) becomes an event only when it follows
-/// the last published event by a forward step the host clock allows (host time from the read
-/// before the one that brought the earlier frame to the read of the later one, so that a read
-/// that drained a backlog does not cut the stream, plus ParserConfig::jump_tolerance_us, at
-/// most a quarter period; without host time a quarter period) and config().confirm_events frames
-/// after it, with at most max_gap_bytes of garbage between them, chain on with such steps. Of the
-/// frames starting near the current position, the one with the longest chain wins; the bytes before
-/// it are dropped and a refused frame costs only its first byte, so an event that garbage
-/// overlapped is found again. Garbage can then only pass as an event when its time lies between two
-/// true neighbours, so the clock never runs ahead of the stream by more than one inter-event gap
-/// and never gains a wrap period from garbage. The last confirm_events events of a read wait for
-/// the next read or for flush().
+/// Incremental parser of the event stream. feed() takes each read's bytes with its host time;
+/// an event split across reads waits for its last byte; bytes that cannot start an event are
+/// dropped and counted. Absolute formats (E2-E4) with host times are framed by evidence: a frame
+/// becomes an event only when its step from the last event fits the host time (from the read
+/// before its own), it is not ahead of the host clock, and a chain of frames follows it; of
+/// competing explanations the one explaining most bytes wins, ties publish nothing. The rules and
+/// their measured guarantee: edvs_driver/README.md, "Event formats and robustness".
 class EventParser {
  public:
   explicit EventParser(const ParserConfig& config = {});

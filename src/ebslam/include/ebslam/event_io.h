@@ -1,39 +1,11 @@
 #pragma once
 
-// Event files: the project's binary format, plain text and the Event Camera Dataset text format.
-//
-// Formats (full byte-level description in docs/event_file_format.md):
-//  - kBinary: the project's own format. A 32-byte versioned header (magic "EBSLAMEV", version,
-//    sensor size, CRC-32), then blocks of up to 65536 events. Each block has a 24-byte header
-//    (magic "EVBK", event count, little-endian 64-bit base timestamp in microseconds, CRC-32 of
-//    the records, CRC-32 of the block header) followed by 8-byte records
-//    (int32 time offset from the base [us], uint16 x, uint16 y | polarity << 15). close()
-//    appends a 24-byte end marker (magic "EVND", total event count), so a file cut at a block
-//    boundary, or left by a writer that never closed, is reported as truncated.
-//  - kText: one event per line `t x y p`, '#' comments and blank lines ignored. t is integer
-//    microseconds; a t token with a decimal point or exponent is read as seconds (so
-//    `1.5 3 4 1` is t = 1500000 us; decimals are converted exactly and rounded to the nearest
-//    microsecond). p is 1 (ON) or 0/-1 (OFF). The writer emits the header
-//    comment `# ebslam events text v1 width=W height=H` followed by `t_us x y p` lines; a reader
-//    takes the sensor size from that comment.
-//  - kRpgText: the Event Camera Dataset (Mueggler et al., IJRR 2017) `events.txt`:
-//    `t[s] x y polarity(0/1)` with decimal seconds. The camera is a DAVIS240C, so the sensor
-//    size is 240 x 180 unless given explicitly. The dataset's calib.txt (`fx fy cx cy k1 ...`)
-//    holds no size; when a sibling calib.txt has a principal point outside 240 x 180 the file
-//    is not from that camera and the size becomes the bounding box of the events.
-//
-// Damage: a reader never throws for a damaged file once it is open. It stops at the first
-// truncated or corrupt record (binary: bad block header, CRC mismatch, short block, coordinates
-// outside the declared sensor; text: a line that does not parse, an event outside the sensor)
-// and reports a message naming the byte offset or line in EventReadResult::error. All complete,
-// valid events before the damage are returned. For a block whose records CRC does not match, the
-// whole block is dropped (the damage cannot be localised inside it); a block cut short by the
-// end of the file keeps its complete records.
-//
-// Time order: readers return events in file order and never reorder them. Timestamps that run
-// backwards are not an error; they are counted in EventReadResult::non_monotonic and the index
-// of the first one is reported, so a caller that needs monotonic time can reject the file or
-// call sortEventsByTime(). Writers accept any order (binary blocks store signed offsets).
+// Event files: the project's binary format (kBinary: versioned, CRC-checked blocks), plain text
+// (kText: `t x y p`, t in integer us or decimal s) and the Event Camera Dataset's `events.txt`
+// (kRpgText). Readers never throw for a damaged file once it is open: they stop at the first
+// damage, keep every valid event before it and describe it in EventReadResult::error; events come
+// in file order, backward time steps are counted, not reordered. Byte layouts, damage rules and
+// the sensor-size rules: docs/event_file_format.md.
 
 #include <cstddef>
 #include <cstdint>
