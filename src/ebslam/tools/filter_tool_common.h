@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -19,6 +20,31 @@
 #include "ebslam/trajectory.h"
 
 namespace ebslam::tools {
+
+/// When the tools record the estimate (runFilter()), and where the filter starts.
+struct RunOptions {
+  std::size_t every = 100;
+  std::int64_t message_us = 0;
+  std::vector<double> start{0.0, 0.0, 0.0};  // x y theta [m, m, rad]
+  std::string start_from;                    // TUM trajectory whose first pose is the start
+  /// The notes are appended to the help of --start and --start-from.
+  void add(CLI::App& app, const std::string& start_note = "",
+           const std::string& start_from_note = "") {
+    app.add_option("--start", start, "initial pose x y theta [m, m, rad]" + start_note)
+        ->expected(3);
+    app.add_option("--start-from", start_from,
+                   "take the initial pose from this TUM trajectory" + start_from_note)
+        ->check(CLI::ExistingFile);
+    app.add_option("--every", every, "record the estimate every this many events")
+        ->capture_default_str();
+    app.add_option("--message-us", message_us,
+                   "instead: process and record per window of this much event time [us], as the "
+                   "ROS nodes receive messages (10000 = 100 Hz)")
+        ->check(CLI::NonNegativeNumber);
+  }
+  /// Throws std::invalid_argument for --every 0, std::runtime_error for an empty --start-from.
+  Pose2 startPose() const;
+};
 
 struct CameraOptions {
   CameraModel camera;
@@ -81,6 +107,14 @@ inline StampedPose toStampedPose(double t_s, const Pose2& p) {
 inline Pose2 toPose2(const StampedPose& s) {
   const Eigen::Matrix3d r = s.orientation.toRotationMatrix();
   return {s.position.x(), s.position.y(), std::atan2(r(1, 0), r(0, 0))};
+}
+
+inline Pose2 RunOptions::startPose() const {
+  if (every == 0) throw std::invalid_argument("--every must be positive");
+  if (start_from.empty()) return Pose2{start[0], start[1], start[2]};
+  const Trajectory gt = readTumTrajectory(start_from);
+  if (gt.empty()) throw std::runtime_error("empty trajectory " + start_from);
+  return toPose2(gt.front());
 }
 
 /// Reads events; a damaged file is processed up to the damage with a warning, an empty stream or

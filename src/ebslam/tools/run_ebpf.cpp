@@ -20,12 +20,10 @@
 int main(int argc, char** argv) {
   using namespace ebslam;
   CLI::App app{"Event-based Particle Filter: localisation under a ceiling with a known edge map"};
-  std::string events_path, edges_path, trajectory_path, start_from, likelihood_png;
+  std::string events_path, edges_path, trajectory_path, likelihood_png;
   double map_resolution = 0.01;
   std::vector<double> map_origin{0.0, 0.0};
-  std::vector<double> start{0.0, 0.0, 0.0};
-  std::size_t every = 100;
-  std::int64_t message_us = 0;
+  tools::RunOptions run;
   tools::CameraOptions camera_options;
   EbpfConfig config;
   app.add_option("events", events_path, "event file (binary, text or rpg)")
@@ -39,25 +37,17 @@ int main(int argc, char** argv) {
   app.add_option("--map-origin", map_origin, "world x y [m] of edge map pixel (0,0)'s centre")
       ->expected(2)
       ->capture_default_str();
-  app.add_option("--start", start, "initial pose x y theta [m, m, rad]")->expected(3);
-  app.add_option("--start-from", start_from, "take the initial pose from this TUM trajectory")
-      ->check(CLI::ExistingFile);
   app.add_option("--gamma", config.gamma, "sensor model sigma in W_trig (eq. 6.37)")
       ->capture_default_str();
   app.add_option("-o,--trajectory", trajectory_path, "output TUM trajectory");
   app.add_option("--likelihood-png", likelihood_png, "write the cached sensor model as PNG");
-  app.add_option("--every", every, "record the estimate every this many events")
-      ->capture_default_str();
-  app.add_option("--message-us", message_us,
-                 "instead: process and record per window of this much event time [us], as the "
-                 "ROS nodes receive messages (10000 = 100 Hz)")
-      ->check(CLI::NonNegativeNumber);
+  run.add(app);
   camera_options.add(app);
   tools::addFilterOptions(app, config.filter);
   CLI11_PARSE(app, argc, argv);
 
   try {
-    if (every == 0) throw std::invalid_argument("--every must be positive");
+    const Pose2 start_pose = run.startPose();
     const CeilingCamera camera(camera_options.camera, camera_options.ceiling_m);
     const cv::Mat edges = cv::imread(edges_path, cv::IMREAD_GRAYSCALE);
     if (edges.empty()) throw std::runtime_error("cannot read edge map " + edges_path);
@@ -66,16 +56,11 @@ int main(int argc, char** argv) {
     if (!likelihood_png.empty()) {
       cv::imwrite(likelihood_png, mapToImage(likelihood, 1.0));
     }
-    Pose2 start_pose{start[0], start[1], start[2]};
-    if (!start_from.empty()) {
-      const Trajectory gt = readTumTrajectory(start_from);
-      if (gt.empty()) throw std::runtime_error("empty trajectory " + start_from);
-      start_pose = tools::toPose2(gt.front());
-    }
     const EventReadResult input = tools::readEventsOrThrow(events_path);
     EventParticleFilter filter(config, camera, std::move(likelihood), start_pose);
     Trajectory trajectory;
-    const double seconds = tools::runFilter(filter, input.events, every, trajectory, message_us);
+    const double seconds =
+        tools::runFilter(filter, input.events, run.every, trajectory, run.message_us);
     std::printf("EB-PF: %zu events, N=%d B=%d K=%d, %.3f s, %.0f events/s\n", input.events.size(),
                 config.filter.num_particles, config.filter.batch_size, config.filter.resample_every,
                 seconds, input.events.size() / seconds);

@@ -19,19 +19,12 @@ int main(int argc, char** argv) {
   using namespace ebslam;
   CLI::App app{"EB-SLAM-2D: event-based SLAM under a ceiling"};
   std::string events_path, trajectory_path, map_png, occurrence_png, normalisation_png;
-  std::string start_from;
-  std::vector<double> start{0.0, 0.0, 0.0};
-  std::size_t every = 100;
-  std::int64_t message_us = 0;
+  tools::RunOptions run;
   bool splat_all = false;
   tools::CameraOptions camera_options;
   Ebslam2dConfig config;
   app.add_option("events", events_path, "event file (binary, text or rpg)")
       ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--start", start, "initial pose x y theta [m, m, rad] (map frame)")->expected(3);
-  app.add_option("--start-from", start_from,
-                 "take the initial pose from this TUM trajectory (puts the map in its frame)")
       ->check(CLI::ExistingFile);
   app.add_option("--cell", config.cell_size_wtrig, "map cell size [W_trig]")->capture_default_str();
   app.add_option("--map-size", config.map_size_m, "map side length [m]")->capture_default_str();
@@ -54,30 +47,20 @@ int main(int argc, char** argv) {
   app.add_option("--map-png", map_png, "final map M as PNG (dark = likely to fire)");
   app.add_option("--occurrence-png", occurrence_png, "final occurrence map O as PNG");
   app.add_option("--normalisation-png", normalisation_png, "final normalisation map Z as PNG");
-  app.add_option("--every", every, "record the estimate every this many events")
-      ->capture_default_str();
-  app.add_option("--message-us", message_us,
-                 "instead: process and record per window of this much event time [us], as the "
-                 "ROS nodes receive messages (10000 = 100 Hz)")
-      ->check(CLI::NonNegativeNumber);
+  run.add(app, " (map frame)", " (puts the map in its frame)");
   camera_options.add(app);
   tools::addFilterOptions(app, config.filter);
   CLI11_PARSE(app, argc, argv);
 
   try {
-    if (every == 0) throw std::invalid_argument("--every must be positive");
+    const Pose2 start_pose = run.startPose();
     if (splat_all) config.splat = OccurrenceSplat::kAllParticles;
     const CeilingCamera camera(camera_options.camera, camera_options.ceiling_m);
-    Pose2 start_pose{start[0], start[1], start[2]};
-    if (!start_from.empty()) {
-      const Trajectory gt = readTumTrajectory(start_from);
-      if (gt.empty()) throw std::runtime_error("empty trajectory " + start_from);
-      start_pose = tools::toPose2(gt.front());
-    }
     const EventReadResult input = tools::readEventsOrThrow(events_path);
     EventSlam2d slam(config, camera, start_pose);
     Trajectory trajectory;
-    const double seconds = tools::runFilter(slam, input.events, every, trajectory, message_us);
+    const double seconds =
+        tools::runFilter(slam, input.events, run.every, trajectory, run.message_us);
     std::printf("EB-SLAM-2D: %zu events, N=%d B=%d K=%d, %.3f s, %.0f events/s\n",
                 input.events.size(), config.filter.num_particles, config.filter.batch_size,
                 config.filter.resample_every, seconds, input.events.size() / seconds);
