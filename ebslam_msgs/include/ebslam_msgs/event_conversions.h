@@ -1,16 +1,11 @@
 #pragma once
 
-// The one conversion between ebslam core events and ebslam_msgs/Event(Array), used by every node
-// and tool that publishes, subscribes or records events (eDVS driver, event file player, event
-// simulator, EB-PF / EB-SLAM-2D nodelets, bag tools).
-//
-// Time convention. An event's `ts` is ROS time: wall time, or /clock's time with use_sim_time.
-// In the nodes the core's Event::t_us holds that same time as integer microseconds since the
-// ROS epoch (toMicroseconds / toRosTime; exact both ways for whole microseconds). A source whose
-// clock is its own (the eDVS device clock, an event file, a simulation) maps it there with
-// ebslam::EventClock (ebslam/event_clock.h: anchored once per stream, speed, never backwards).
-// EventArray.header.stamp is the ts of the array's last event; header.frame_id is the sensor's
-// optical frame; width x height the sensor's size.
+// The one conversion between ebslam core events and ebslam_msgs/Event(Array), for every node and
+// tool that publishes, subscribes or records events. An event's `ts` is ROS time (wall or
+// /clock); Event::t_us holds it as integer us since the ROS epoch (a source with its own clock
+// maps it there with ebslam::EventClock). EventArray: header.stamp = ts of the last event,
+// frame_id = the sensor's optical frame, width x height = the sensor.
+// Details: docs/ros_nodes_notes.md#event-conversions
 
 #include <ebslam/event.h>
 #include <ebslam_msgs/Event.h>

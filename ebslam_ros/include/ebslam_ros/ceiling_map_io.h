@@ -1,14 +1,8 @@
 #pragma once
-// Ceiling maps on disk (ROS-free): the known edge map EB-PF localises on, and the map EB-SLAM
-// saves. Two yaml layouts are read:
-//  - map_server's: `image` (relative to the yaml), `resolution` [m/pixel], `origin` [x, y, yaw]
-//    of the lower-left pixel's lower-left corner (yaw must be 0), `negate`, `occupied_thresh`;
-//    image row 0 is the top (largest y); a pixel is an edge where map_server would call it
-//    occupied: (255 - v) / 255 > occupied_thresh (v / 255 with negate: 1);
-//  - ebslam_simulate_events --map's: `edges` (non-zero = edge), `resolution_m`, `origin_x_m`,
-//    `origin_y_m` = centre of pixel (0, 0), rows growing with y.
-// Either way the result is in the core's convention (makeEdgeLikelihoodMap): row r, column c
-// has its centre at origin_centre_m + (c, r) * resolution_m.
+// Ceiling maps on disk (ROS-free): the known edge map EB-PF localises on and the map EB-SLAM
+// saves. Reads map_server's yaml layout and ebslam_simulate_events --map's; the result is in the
+// core's convention (makeEdgeLikelihoodMap): pixel (c, r) has its centre at origin_centre_m +
+// (c, r) * resolution_m. Layouts: docs/ros_nodes_notes.md#ceiling-maps
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>

@@ -1,17 +1,9 @@
 #pragma once
 // Checks an incoming EventArray before an event filter sees it (ROS-free apart from the message
-// type, so it is unit-tested without a master). Time convention: event time = the event's `ts`
-// as microseconds since the ROS epoch (ebslam_msgs/event_conversions.h), the stamp of every pose
-// computed from it.
-//
-// What it does with bad input, so that a filter never throws on it and nothing passes silently:
-//  - a message whose width x height differs from the sensor's: rejected whole (counted);
-//  - events outside width x height: dropped (counted);
-//  - events earlier than their predecessor by at most `max_backward_us`: time clamped to the
-//    predecessor's (counted; sensor and transport jitter);
-//  - earlier by more: the stream restarted (a looping bag, a driver reconnect): the events from
-//    there on start a new segment with `restart` set, the caller resets its filter;
-//  - a pause longer than `gap_warning_us` before a message: reported in `gap_us`.
+// type). Event time = `ts` in us since the ROS epoch. Bad input never reaches the filter and is
+// counted: wrong size -> message rejected; events outside -> dropped; a step back of at most
+// max_backward_us -> clamped; more -> a new segment with `restart`; a long pause -> `gap_us`.
+// Details: docs/ros_nodes_notes.md#event-input-checks
 
 #include <ebslam/event.h>
 #include <ebslam_msgs/EventArray.h>

@@ -1,16 +1,9 @@
 #pragma once
-// The ROS side shared by the EventParticleFilter and EventSlam2d nodelets (not a nodelet
-// itself): input checks (EventInputGuard), the optional background-activity filter (~denoise),
-// the filter's life cycle (lazy start once the sensor mounting is known, reset on a jump back
-// in time or by the `reset` service), and the outputs pose, path, particles, tf, diagnostics and
-// the dynamic_reconfigure knobs.
-//
-// Frames (REP 105): map -> odom -> base_link -> sensor_frame. The core filters estimate the
-// planar pose of the sensor's optical frame (x along pixel columns, y along rows, z = optical
-// axis pointing up to the ceiling); the mounting base_link -> sensor_frame turns it into
-// base_link's pose. The map frame's z = 0 is base_link's plane (the floor).
-// Time: every output is stamped with the time of the last event it includes
-// (ebslam_msgs/event_conversions.h).
+// The ROS side shared by the EventParticleFilter and EventSlam2d nodelets (not a nodelet): input
+// checks, optional denoising, the filter's life cycle and the outputs (pose, path, particles, tf,
+// diagnostics, dynamic_reconfigure). Frames (REP 105): map -> odom -> base_link -> sensor_frame;
+// the core estimates the planar pose of the sensor's optical frame (z up to the ceiling). Outputs
+// carry the time of their last event. Details: docs/ros_nodes_notes.md#pose-filter-nodelets
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>

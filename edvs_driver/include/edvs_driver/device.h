@@ -1,17 +1,9 @@
 #pragma once
 
 // An eDVS reached through a URI: opening, reset, configuration, streaming, biases. ROS-free.
-//
-// URI syntax:
-//   serial:///dev/ttyUSB0?baud=4000000&format=E2&firmware=current&rtscts=1
-//   serial://?serial_number=FT4XYZ12&format=E2   (FTDI bridge chosen by USB serial number)
-//   tcp://192.168.201.62:56000?format=E3           (eDVS WiFi module)
-//   file:///path/capture.raw?format=E2&rate=400000 (raw byte capture, paced at rate bytes/s;
-//                                                   rate=0 reads as fast as possible; it ends
-//                                                   at its end unless loop=1)
-// Query keys: baud (serial), rtscts (serial, 0/1), format (E0..E4 for the firmware, or
-// none/delta/ts16/ts24/ts32), firmware (current/legacy), serial_number (serial), rate (file),
-// loop (file, 0/1).
+// URIs: serial:///dev/ttyUSB0?baud=4000000&format=E2, serial://?serial_number=FT4XYZ12,
+// tcp://192.168.201.62:56000?format=E3, file:///path/capture.raw?format=E2&rate=400000&loop=1.
+// Every query key and its values: edvs_driver/README.md, "Device URIs".
 
 #include <array>
 #include <cstdint>

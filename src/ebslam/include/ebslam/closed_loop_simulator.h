@@ -1,15 +1,11 @@
 #pragma once
 
 // Closed-loop floor-robot simulator for autonomous exploration (thesis 7.4): a differential-drive
-// robot driven by velocity commands in a room given as a FloorPlan, with a 360-degree ring of
-// contact ("bump") sensors and the upward-looking eDVS of the ceiling scenario
-// (simulator_scenes.h) whose events come from an EventStream (simulator.h) moved along the
-// robot's actual motion. Seeded and deterministic; runs as fast as the rendering allows.
-//
-// Frames: world = the floor plan's frame (x, y on the floor, z up). The robot pose (x, y, theta)
-// is the sensor's pose as in simulator_scenes.h (sensor mounted at the robot's centre, camera x =
-// robot forward). Bump directions are in the robot frame: 0 = forward, counter-clockwise
-// positive [rad].
+// robot in a FloorPlan room, driven by velocity commands, with a 360-degree bump ring and the
+// upward eDVS of simulator_scenes.h (an EventStream moved along the actual motion); seeded,
+// deterministic. Frames: world = the floor plan's (z up); robot pose = the sensor's pose; bump
+// directions in the robot frame, 0 = forward, counter-clockwise positive [rad].
+// Details: docs/ebslam_core.md#closed-loop-simulator
 
 #include <cstdint>
 #include <vector>

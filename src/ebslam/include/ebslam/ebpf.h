@@ -32,20 +32,10 @@ struct EventFilterConfig {
   int batch_size = 3;        ///< B in [1, 64]: events scored together (6.5.3: 3), eq. 6.30/6.39
   int resample_every = 100;  ///< K: events between resamplings (6.5.3: 100)
   double beta = 0.95;        ///< relative influence of the last G0 events on a score (eq. 6.27)
-  /// G0: effective number of feature points seen, sets the decay alpha (eq. 6.27) and the
-  /// per-event diffusion Delta_x = D / (f G0), Delta_theta = 3 / (S G0) (eq. 6.9/6.10).
-  /// 60, not the thesis' example 250 (6.3.2): G0 = 60 tracks every simulated freiburg2_pioneer_*
-  /// run (docs/results/events2d.md; 30, 60, 100 and 250 compared over all of them), 250 loses
-  /// them. Why they differ: the per-event diffusion has to cover the motion between two
-  /// resamplings, and a random walk spreads only with the square root of the event count. The
-  /// simulated sensor (contrast threshold 0.15, lines at about four thresholds of contrast)
-  /// fires about 5000 events per pixel of motion on this ceiling, so the motion per event is far
-  /// below W_trig / 250 and what matters is the event rate per second against the robot speed
-  /// (about 40k events/s; up to 0.5-0.8 m/s and 0.7-1.2 rad/s on these runs): with G0 = 250 the
-  /// headings diffuse by 0.9 mrad per K = 100 events (2.5 ms) while the robot turns by up to
-  /// 3 mrad. The sensor and event rate of the
-  /// thesis' simulation are not given; G0 is a property of scene and sensor and is set per setup
-  /// (or estimated online, adapt_g0).
+  /// G0: effective number of feature points seen; sets the decay alpha (eq. 6.27) and the
+  /// per-event diffusion Delta_x = D / (f G0), Delta_theta = 3 / (S G0) (eq. 6.9/6.10). 60, not
+  /// the thesis' example 250 (6.3.2), which loses the simulated runs; a property of scene and
+  /// sensor, set per setup (or adapt_g0). Why: docs/ebslam_core.md#eb-pf-choice-of-g0
   double g0 = 60.0;
   /// Extra factor on the diffusion standard deviations (1 = eq. 6.38 exactly).
   double diffusion_scale = 1.0;

@@ -1,20 +1,10 @@
 #pragma once
 
-// Event-based SLAM in 2D (thesis 7.2-7.3, alg. 8): EB-PF localisation against a map that is
-// built from the events at the same time. Maps are dense grids on the ceiling plane:
-//  - occurrence map O: every event is splatted with a precomputed Gaussian at its ceiling point
-//    under the expected pose (eq. 7.6);
-//  - normalisation map Z: how often a cell could have produced an event, the length of its path
-//    on the sensor [pixels] under the motion of the expected pose (eq. 7.7), accumulated
-//    periodically (whenever the expected pose has moved the image by a set number of pixels)
-//    over the visible region only;
-//  - map M = O / (Z + Z0) (eq. 7.5), updated where O or Z change. Z0 > 0 is a prior count of
-//    possible observations that keeps barely observed cells from dividing by ~0 (alg. 8 sets
-//    M = 0 where Z = 0, which would leave the map empty until the pose estimate first moves).
-// G0 feedback (7.2.4): G0 is not estimated from M, which rules out the self-reinforcing loop
-// low G0 -> more diffusion -> larger Z -> smaller M -> lower G0 described in the thesis. It is
-// either fixed (config.filter.g0) or, with config.filter.adapt_g0, measured from the event count
-// per pixel of net image motion of p_* (G0Tracker), which does not depend on M.
+// Event-based SLAM in 2D (thesis 7.2-7.3, alg. 8): EB-PF localisation against a ceiling map built
+// from the same events. Dense grids on the ceiling plane: occurrence map O (eq. 7.6), normalisation
+// map Z (eq. 7.7: path length on the sensor [pixels]) and map M = O / (Z + Z0) (eq. 7.5; a prior
+// Z0 > 0 instead of alg. 8's M = 0 where Z = 0). G0 is fixed or measured by G0Tracker, never
+// estimated from M (7.2.4). Details: docs/ebslam_core.md#eb-slam-2d
 
 #include <cmath>
 #include <cstddef>
@@ -60,19 +50,11 @@ struct Ebslam2dConfig {
   double normalisation_step_px = 1.0;
   /// Z0: prior number of possible observations per cell [pixels of path], see the file comment.
   double normalisation_prior_px = 1.0;
-  /// Noise-aware diffusion (robust start under background activity). Eq. 6.9/6.10 assume that
-  /// every event comes from motion, so the particles diffuse per event; background-activity
-  /// events carry no motion, and while the robot stands still (no signal at all) they let the
-  /// particle cloud and with it the map's origin random-walk by several cm per second at
-  /// 0.3-1 Hz per pixel. With this option the per-event diffusion variance is scaled by the
-  /// estimated signal fraction 1 - (1 + 2 / sqrt(n)) r_noise / r of the event rate r (n events
-  /// in a window of rate_window_s; the margin covers the Poisson scatter of pure background);
-  /// r_noise is the background rate estimated online from the quiet windows (initialised by the
-  /// first window, falls fast towards lower window rates, rises slowly towards rates just above
-  /// it); no diffusion before the first window (a robot starts from rest). Measured on the
-  /// simulated freiburg2_pioneer_360 run at 0.3 Hz per pixel, standing still for the first
-  /// 2.5 s: the thesis' model drifts 5-16 cm in that time, this one 1-5 cm. Off (false) is the
-  /// thesis' model; parameters chosen on freiburg2_pioneer_360 only.
+  /// Noise-aware diffusion (robust start under background activity): the per-event diffusion
+  /// variance (eq. 6.9/6.10) is scaled by the estimated signal fraction
+  /// 1 - (1 + 2 / sqrt(n)) r_noise / r of the event rate r (n events per rate_window_s; r_noise
+  /// estimated online); no diffusion before the first window. false = the thesis' model.
+  /// Why and measurements: docs/ebslam_core.md#noise-aware-diffusion
   bool noise_aware_diffusion = false;
   double rate_window_s = 0.02;  ///< window of the event rate [s]
   /// Gains of the background-rate estimate per window: towards a lower rate, towards a higher

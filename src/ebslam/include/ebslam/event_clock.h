@@ -1,25 +1,10 @@
 #pragma once
 
-// The time convention of published events (ROS-free; the ROS side is
-// ebslam_msgs/event_conversions.h).
-//
-// A source of events has a clock of its own: the eDVS device clock unwrapped to 64 bit, the times
-// in an event file, the simulated time along a trajectory (all microseconds, Event::t_us). What
-// it publishes is on the "published clock": integer microseconds since the ROS epoch (wall time,
-// or the time of /clock with use_sim_time). An EventClock maps one to the other:
-//
-//   published_us = anchor_published_us + round((t_us - anchor_t_us) / speed)
-//
-// anchored once per stream (the driver: the host time of the read that delivered the stream's
-// first events; the file player: the wall time at the start of playback; the simulator: the
-// wall time or ~clock_start at the start, then the end of the previous pass when looping). With
-// speed 1 the mapping is exact integer arithmetic; with speed s != 1 the published clock keeps
-// microseconds, so stream times come back from it within s / 2 us.
-//
-// stamp() additionally never returns a time before the one it returned last (the monotonic
-// clamp: device time that jitters back, a new stream anchored before the previous one's last
-// event), also across re-anchoring. map() is the unclamped mapping (the file player publishes a
-// file's events in file order, backward steps included).
+// Maps a source's own clock (eDVS device clock, event file, simulated time; Event::t_us [us]) to
+// the published clock, integer us since the ROS epoch: published_us = anchor_published_us +
+// round((t_us - anchor_t_us) / speed), anchored once per stream. stamp() never goes back (also
+// across re-anchoring); map() is unclamped. ROS-free; the ROS side is
+// ebslam_msgs/event_conversions.h. Details: docs/ebslam_core.md#event-clock
 
 #include <cstdint>
 #include <optional>

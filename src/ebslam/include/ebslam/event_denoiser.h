@@ -1,25 +1,10 @@
 #pragma once
 
-// Background-activity filter of event vision (Delbruck 2008, "Frame-free dynamic digital vision";
-// jAER's BackgroundActivityFilter and, with a support count, its SpatioTemporalCorrelationFilter):
-// background activity is uncorrelated in space and time, while a moving edge fires neighbouring
-// pixels within a short time. An event passes when at least `min_support` of its 8 neighbouring
-// pixels fired within `window_us` before it (optionally counting only events of its own polarity:
-// an edge fires one polarity, noise both). Optionally a per-pixel refractory filter drops an
-// event that follows the same pixel's previous event by less than `refractory_period_us`
-// (bursts of hot or flickering pixels).
-//
-// Why a support count and polarity: on a slowly moving scene (a floor robot under a ceiling 2.6 m
-// up moves the image by 10-30 pixels per second) neighbouring pixels of one edge fire tens of
-// milliseconds apart, so the window must be long, and with a long window a single noise event in
-// the neighbourhood lets noise pass (8 x window x rate: 40 % at 50 ms and 1 Hz per pixel).
-// Requiring several neighbours of the same polarity cuts that to the chance of several noise
-// events of one polarity around one pixel, while an edge has neighbours along it and behind it
-// that fired with the same polarity.
-//
-// O(1) per event: a map of each pixel's last event time (per polarity if polarity_match; padded by
-// one pixel, so no bounds checks); an event reads its 8 neighbours' times and writes its own.
-// Every event updates the map, passed or not (as jAER).
+// Background-activity filter of event vision (Delbruck 2008; jAER's BackgroundActivityFilter and
+// SpatioTemporalCorrelationFilter): an event passes when at least `min_support` of its 8
+// neighbouring pixels fired within `window_us` before it (optionally only events of its own
+// polarity); optionally a per-pixel refractory filter. O(1) per event. Why a support count and
+// polarity, and the data layout: docs/ebslam_core.md#background-activity-filter
 
 #include <cstddef>
 #include <cstdint>

@@ -1,16 +1,9 @@
 #pragma once
 
 // Per-pixel event generation of a dynamic vision sensor (log-intensity change detector), shared
-// by the 2D ceiling simulator (simulator.h) and the D-eDVS room simulator (dedvs_simulator.h).
-//
-// Model per pixel: an event fires when the log intensity has changed by the pixel's contrast
-// threshold since its last reference level; the reference then moves by one threshold, so a
-// change of several thresholds between two rendered images gives several events, their times
-// interpolated linearly between the two render times. Thresholds have a per-pixel mismatch, a
-// pixel is blind for a refractory period after an event (crossings during it move the
-// reference but emit nothing), and background noise events arrive as a Poisson process per
-// pixel (rates optionally spread log-normally across pixels, plus hot pixels). Everything
-// random is seeded.
+// by the ceiling simulator (simulator.h) and the D-eDVS room simulator (dedvs_simulator.h):
+// contrast-threshold crossings with per-pixel mismatch, a refractory period and Poisson
+// background noise; everything random is seeded. Details: docs/event_simulator.md#model
 
 #include <cstddef>
 #include <cstdint>

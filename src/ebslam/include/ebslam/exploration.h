@@ -1,23 +1,11 @@
 #pragma once
 
 // Autonomous exploration with EB-SLAM (thesis 7.4): a floor robot with a bump ring explores an
-// unknown room, localised only by EB-SLAM-2D.
-//  - Maps on a hexagonal grid (all six neighbours at the same distance): the localisation
-//    exploration map Z (EB-SLAM's normalisation map, eq. 7.7, averaged over each hex cell), the
-//    obstacle exploration map E (how often each cell was covered by the robot, incremented when
-//    the robot enters a new cell) and the blocked cells (after a bump the cells in a cone in the
-//    direction of the contact).
-//  - The information gain G(v) = w_Z L_a(-Z_0(v)) + w_E L_a(-E_0(v)) (eq. 7.9, 7.10) of the maps
-//    normalised by M_0 = (M - mean M) / (max M - min M) (eq. 7.8). The domain Omega of the
-//    normalisation is the set of cells the robot can reach from its cell through cells not
-//    blocked (the part of the grid the robot knows to be connected to it).
-//  - A best-first search from the robot's cell that expands paths of high gain per path length
-//    first (the gain as heuristic, as in A* but without a goal), through unblocked cells, under a
-//    node and a time budget; the path with the best gain per length is driven.
-//  - Replanning when the path is done, after a bump and when the pose jumps; a controller that
-//    follows the planned cells on the EB-SLAM pose.
-// Frames: everything is in EB-SLAM's map frame (x, y [m], theta [rad]); the robot pose is the
-// eDVS' planar pose (the sensor sits at the robot's centre).
+// unknown room, localised only by EB-SLAM-2D. Hex-grid maps Z (eq. 7.7) and E and blocked cells,
+// the information gain of eq. 7.8-7.10, a best-first search by gain per path length, replanning
+// and a path-following controller. Frames: EB-SLAM's map frame (x, y [m], theta [rad]); the robot
+// pose is the eDVS' planar pose (sensor at the robot's centre).
+// Details: docs/ebslam_core.md#exploration
 
 #include <array>
 #include <cstdint>

@@ -1,16 +1,11 @@
 #pragma once
 
-// Floor plan of a room for the closed-loop exploration simulator (thesis 7.4, fig. 7.10): the
-// room's walls as one closed polygon and obstacles on the floor as further closed polygons, in
-// the world frame of the floor-robot scenario (simulator_scenes.h: x, y on the floor [m], z up).
-//
-// File format (text, one item per line, '#' starts a comment, blank lines are ignored):
-//   name <word>                 optional, the layout's name
-//   start <x> <y> <theta>       the robot's start pose [m, m, rad]; required
-//   walls                       the room boundary follows: one "x y" vertex per line
-//   obstacle                    an obstacle follows: one "x y" vertex per line
-// A polygon ends at the next keyword or the end of the file, and must be closed: its last vertex
-// repeats its first. Exactly one `walls` polygon; any number of obstacles.
+// Floor plan of a room for the closed-loop exploration simulator (thesis 7.4, fig. 7.10): walls as
+// one closed polygon, obstacles as further closed polygons, in the floor-robot world frame
+// (simulator_scenes.h: x, y on the floor [m], z up). Text file: `name`, `start x y theta`
+// (required), one `walls` and any number of `obstacle` keywords, each followed by one "x y" vertex
+// per line, the last vertex repeating the first; '#' comments.
+// Format: docs/ebslam_core.md#floor-plans
 
 #include <string>
 #include <vector>

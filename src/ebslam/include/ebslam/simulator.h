@@ -1,23 +1,10 @@
 #pragma once
 
 // Event simulator: a dynamic vision sensor moving through a static world of textured planes
-// (thesis 6.2 and the simulation of 6.5.3).
-//
-// Rendering: at a high internal rate the camera pose is interpolated from the trajectory
-// (linear position, slerp orientation) and every pixel's viewing ray is intersected with the
-// planes; the intensity is a bilinear lookup in the plane's texture, which is pre-filtered with
-// a Gaussian the size of the pixel footprint (optics and pixel area: anti-aliasing), optionally
-// with supersampling. Event model per pixel (log-intensity change detector): an event fires when
-// the log intensity has changed by the pixel's contrast threshold since its last reference
-// level; the reference then moves by one threshold, so a change of several thresholds between
-// two render steps gives several events, their times interpolated linearly between the steps.
-// Thresholds have a per-pixel mismatch, a pixel is blind for a refractory period after an
-// event, and background noise events arrive as a Poisson process per pixel (rates optionally
-// spread log-normally across pixels, plus hot pixels). Everything random is seeded.
-//
-// Time: event timestamps are the trajectory's own clock in microseconds, round(t_s * 1e6), so
-// events and the ground-truth trajectory share one clock (the floor-robot trajectories start
-// at t = 0).
+// (thesis 6.2 and the simulation of 6.5.3): anti-aliased ray casting at a high internal rate and
+// the per-pixel event model of event_model.h; everything random is seeded. Event times are the
+// trajectory's own clock in us, round(t_s * 1e6), shared with the ground truth.
+// Details: docs/event_simulator.md#model
 
 #include <cstdint>
 #include <functional>

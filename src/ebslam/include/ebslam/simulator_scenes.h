@@ -1,19 +1,11 @@
 #pragma once
 
-// The floor-robot scenario of thesis 6.5 / 7.3 for the event simulator: a robot drives on a
-// flat floor with an eDVS looking straight up at a textured ceiling D = 2.59 m above the sensor.
-//
-// World frame of the scenario: z up, the sensor's projection centre moves in the plane z = 0,
-// the ceiling is the plane z = D. Robot pose (x, y, theta) in SE(2) maps to the camera pose
-// camera -> world = (translation (x, y, 0), rotation R_z(theta)), i.e. camera x = robot
-// forward, camera z = up: exactly the transform T_p of eq. 6.33, so a ceiling point seen at
-// pixel e lies at (x, y) + R_z(theta) (D / f) (e - c) (eq. 6.32-6.35, no distortion).
-//
-// Ceiling map convention (for EB-PF / EB-SLAM-2D): map pixel (col, row) has its centre at world
-// (origin_m.x() + col * metres_per_pixel, origin_m.y() + row * metres_per_pixel), row growing
-// with world y; that is the origin_centre_m of makeEdgeLikelihoodMap (ebpf.h). Seen from below with
-// heading 0 the sensor image has the same orientation as the map (u along world x, v along world
-// y).
+// The floor-robot scenario of thesis 6.5 / 7.3: an eDVS on a floor robot looks straight up at a
+// textured ceiling D = 2.59 m above. World: z up, the sensor in the plane z = 0; robot pose
+// (x, y, theta) -> camera -> world = ((x, y, 0), R_z(theta)), camera x = robot forward (T_p of
+// eq. 6.33). Ceiling map pixel (col, row) has its centre at origin_m + (col, row) *
+// metres_per_pixel (makeEdgeLikelihoodMap's origin_centre_m).
+// Details: docs/event_simulator.md#floor-robot-scenario-65
 
 #include <cstdint>
 #include <string>
@@ -45,13 +37,9 @@ struct FloorRobotTrajectoryConfig {
 };
 
 /// Projects a motion-capture trajectory into the floor plane and returns the eDVS camera poses
-/// looking up (see the file comment):
-///  - the floor normal is the world axis along which the positions vary least (TUM pioneer
-///    files: z, the camera height of the Kinect on the Pioneer varies by a few cm only);
-///  - x, y are the position's coordinates in the plane orthogonal to it (z, roll and pitch are
-///    dropped, as they contain the camera mount and floor unevenness);
-///  - the yaw theta is the heading of the recorded body's optical axis (body z; the TUM poses
-///    are those of the forward-looking Kinect) projected into the floor plane.
+/// looking up (see the file comment): floor normal = the world axis of least position variance;
+/// x, y = the position in the floor plane (height, roll and pitch dropped); theta = the heading
+/// of the body's optical axis (body z). Details: docs/event_simulator.md#floor-robot-scenario-65
 /// Throws std::invalid_argument for fewer than two poses or invalid poses, and if the optical
 /// axis is nearly vertical (not a floor robot).
 Trajectory makeFloorRobotTrajectory(const Trajectory& mocap_trajectory,
