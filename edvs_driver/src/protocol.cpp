@@ -442,11 +442,10 @@ void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bo
   out.push_back(e);
 }
 
-void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
+void EventParser::buildChains() {
   const std::size_t n = held_.size();
   const std::size_t frame = static_cast<std::size_t>(minEventBytes(config_.format));
   const std::size_t gap = static_cast<std::size_t>(config_.max_gap_bytes);
-  if (n < frame) return;
   // Longest chain of plausible steps starting at each position (backwards over the bytes).
   // A chain's whole advance must fit the host time it spans too (a frame misaligned by a byte
   // can make a chain of small forward steps that runs far faster than the clock).
@@ -497,7 +496,80 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
     chain_advance_[p] = best_advance;
     chain_end_host_[p] = best_end_host;
   }
+}
 
+EventParser::Candidates EventParser::findCandidates(std::size_t pos,
+                                                    std::size_t window_last) const {
+  const std::size_t n = held_.size();
+  Candidates c{n, n, n, 0, 0, Link{}};
+  for (std::size_t s = pos; s <= window_last; ++s) {
+    if (chain_length_[s] == 0) continue;
+    // Bytes skipped to reach a candidate count against it like bytes skipped in a chain.
+    const std::int64_t value = chain_score_[s] - static_cast<std::int64_t>(s - pos);
+    Link l;
+    if (have_last_) {
+      l = linkFromLast(s);
+      if (!l.ok) {
+        if (c.unlinked == n || value > c.unlinked_value) {
+          c.unlinked = s;
+          c.unlinked_value = value;
+        }
+        continue;
+      }
+    }
+    if (c.best == n || value > c.best_value) {
+      c.best = s;
+      c.best_value = value;
+      c.best_link = l;
+      c.tied = n;
+    } else if (value == c.best_value) {
+      c.tied = s;
+    }
+  }
+  return c;
+}
+
+EventParser::Link EventParser::clockJumpLink(std::size_t pos) {
+  ++stats_.clock_jumps;
+  ++stats_.implausible_jumps;
+  const FrameRef f = frameAt(pos);
+  Link l;
+  l.ok = true;
+  const std::int64_t period = wrapPeriodUs(config_.format);
+  const std::int64_t behind = ((last_.raw - f.raw) % period + period) % period;
+  if (behind < tolerance()) {
+    // Slightly behind the last published event, which ran ahead: hold the time until the
+    // device clock has caught up, never stepping back.
+    l.step_us = 0;
+    behind_debt_us_ += behind;
+  } else {
+    l.step_us = f.host_us != kNoHost && last_.host_us != kNoHost
+                    ? std::max<std::int64_t>(0, f.host_us - last_.host_us)
+                    : 0;
+  }
+  have_latency_ = false;
+  return l;
+}
+
+void EventParser::countSkipped(std::size_t from, std::size_t to) {
+  for (std::size_t s = from; s < to; ++s) {
+    if (chain_length_[s] > 0) {
+      ++stats_.rejected_events;
+      if (have_last_ && !linkFromLast(s).ok) ++stats_.implausible_jumps;
+    }
+  }
+  if (to > from) {
+    stats_.bytes_dropped += to - from;
+    if (!in_garbage_) ++stats_.resyncs;
+  }
+}
+
+void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
+  const std::size_t n = held_.size();
+  const std::size_t frame = static_cast<std::size_t>(minEventBytes(config_.format));
+  const std::size_t gap = static_cast<std::size_t>(config_.max_gap_bytes);
+  if (n < frame) return;
+  buildChains();
   const int confirm = config_.confirm_events + 1;
   const std::size_t lookahead_bytes =
       static_cast<std::size_t>(config_.lookahead_events) * frame + gap;
@@ -507,33 +579,8 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
     // Candidates: frames starting within one frame plus the gap allowance of the position.
     const std::size_t window_last = std::min(pos + frame + gap, n - frame);
     const bool window_complete = pos + frame + gap + frame <= n;
-    std::size_t best = n, unlinked = n, tied = n;
-    std::int64_t best_value = 0, unlinked_value = 0;
-    Link best_link;
-    for (std::size_t s = pos; s <= window_last; ++s) {
-      if (chain_length_[s] == 0) continue;
-      // Bytes skipped to reach a candidate count against it like bytes skipped in a chain.
-      const std::int64_t value = chain_score_[s] - static_cast<std::int64_t>(s - pos);
-      Link l;
-      if (have_last_) {
-        l = linkFromLast(s);
-        if (!l.ok) {
-          if (unlinked == n || value > unlinked_value) {
-            unlinked = s;
-            unlinked_value = value;
-          }
-          continue;
-        }
-      }
-      if (best == n || value > best_value) {
-        best = s;
-        best_value = value;
-        best_link = l;
-        tied = n;
-      } else if (value == best_value) {
-        tied = s;
-      }
-    }
+    Candidates c = findCandidates(pos, window_last);
+    std::size_t best = c.best;
     bool clock_jump = false;
     if (best != n && !flushing) {
       if (chain_length_[best] < confirm && chain_open_[best]) break;
@@ -547,16 +594,16 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
       if (!enough_bytes && !old_enough) break;
     }
     if (best != n) {
-      if (tied != n) {
+      if (c.tied != n) {
         // Two frames explain the bytes equally well (garbage whose time fell between two true
         // events): publishing either could invent an event, so neither is.
-        for (std::size_t s = pos; s <= tied; ++s) {
+        for (std::size_t s = pos; s <= c.tied; ++s) {
           if (chain_length_[s] > 0) ++stats_.rejected_events;
         }
-        stats_.bytes_dropped += tied + 1 - pos;
+        stats_.bytes_dropped += c.tied + 1 - pos;
         if (!in_garbage_) ++stats_.resyncs;
         in_garbage_ = true;
-        pos = tied + 1;
+        pos = c.tied + 1;
         continue;
       }
       if (!have_last_ && chain_length_[best] < confirm && !flushing) {
@@ -565,13 +612,13 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
         best = n;
       }
     }
-    if (best == n && unlinked != n) {
+    if (best == n && c.unlinked != n) {
       // Nothing follows the last event plausibly: a long self-consistent chain means the device
       // clock itself jumped (reset, or a misjudged last event); continue monotonically.
-      if (chain_length_[unlinked] >= jump_chain) {
-        best = unlinked;
+      if (chain_length_[c.unlinked] >= jump_chain) {
+        best = c.unlinked;
         clock_jump = true;
-      } else if (chain_open_[unlinked] && !flushing) {
+      } else if (chain_open_[c.unlinked] && !flushing) {
         break;  // not enough evidence yet
       }
     }
@@ -588,37 +635,9 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
       ++pos;
       continue;
     }
-    for (std::size_t s = pos; s < best; ++s) {
-      if (chain_length_[s] > 0) {
-        ++stats_.rejected_events;
-        if (have_last_ && !linkFromLast(s).ok) ++stats_.implausible_jumps;
-      }
-    }
-    if (best > pos) {
-      stats_.bytes_dropped += best - pos;
-      if (!in_garbage_) ++stats_.resyncs;
-    }
-    if (clock_jump) {
-      ++stats_.clock_jumps;
-      ++stats_.implausible_jumps;
-      const FrameRef f = frameAt(best);
-      best_link = Link{};
-      best_link.ok = true;
-      const std::int64_t period = wrapPeriodUs(config_.format);
-      const std::int64_t behind = ((last_.raw - f.raw) % period + period) % period;
-      if (behind < tolerance()) {
-        // Slightly behind the last published event, which ran ahead: hold the time until the
-        // device clock has caught up, never stepping back.
-        best_link.step_us = 0;
-        behind_debt_us_ += behind;
-      } else {
-        best_link.step_us = f.host_us != kNoHost && last_.host_us != kNoHost
-                                ? std::max<std::int64_t>(0, f.host_us - last_.host_us)
-                                : 0;
-      }
-      have_latency_ = false;
-    }
-    publishFrame(best, best_link, !have_last_, chain_length_[best] >= 2 * confirm, out);
+    countSkipped(pos, best);
+    const Link step = clock_jump ? clockJumpLink(best) : c.best_link;
+    publishFrame(best, step, !have_last_, chain_length_[best] >= 2 * confirm, out);
     pos = best + frame;
   }
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(pos));

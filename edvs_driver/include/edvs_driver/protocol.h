@@ -285,6 +285,17 @@ class EventParser {
   static std::int64_t hostSpan(const FrameRef& a, std::int64_t later_host_us);
   void publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
                     ebslam::EventVector& out);
+  // Candidate frames near a position: the best one that follows the last event plausibly (and
+  // another as good, if any), and the best one that does not.
+  struct Candidates {
+    std::size_t best, unlinked, tied;  // held_.size() if none
+    std::int64_t best_value, unlinked_value;
+    Link best_link;
+  };
+  void buildChains();  // chain_* and frames_ for every held position
+  Candidates findCandidates(std::size_t pos, std::size_t window_last) const;
+  Link clockJumpLink(std::size_t pos);  // counts the jump, forgets the latency floor
+  void countSkipped(std::size_t from, std::size_t to);  // bytes [from, to) dropped
   void decideAbsolute(bool flushing, ebslam::EventVector& out);
 
   std::vector<std::uint8_t> held_;         // bytes after the last published event
