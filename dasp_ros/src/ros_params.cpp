@@ -1,26 +1,14 @@
 #include "dasp_ros/ros_params.h"
 
+#include <ebslam_msgs/ros_param_helpers.h>
+
 #include <cmath>
 #include <stdexcept>
 
 namespace dasp_ros {
-namespace {
 
-template <typename T>
-T param(const ros::NodeHandle& nh, const std::string& name, const T& default_value) {
-  T value;
-  nh.param<T>(name, value, default_value);
-  return value;
-}
-
-void requirePositive(double value, const ros::NodeHandle& nh, const std::string& name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument("parameter " + nh.resolveName(name) + " = " +
-                                std::to_string(value) + " must be a positive number");
-  }
-}
-
-}  // namespace
+using ebslam_msgs::param;
+using ebslam_msgs::requirePositive;
 
 RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& nh) {
   RgbdFolderSourceConfig config;

@@ -19,15 +19,11 @@
 // ~clock_start + t with /clock; steps are paced at ~speed times real time (or run as fast as
 // they are simulated when that is slower). The simulation runs in a thread of its own.
 #include <ebslam_msgs/Bump.h>
-#include <geometry_msgs/PoseStamped.h>
-#include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/Twist.h>
-#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
-#include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/Marker.h>
 
 #include <ebslam/closed_loop_simulator.h>
@@ -37,7 +33,6 @@
 
 #include <atomic>
 #include <cmath>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -45,6 +40,7 @@
 #include <thread>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/ground_truth_publisher.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -74,8 +70,8 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
     bump_pub_ = nh.advertise<ebslam_msgs::Bump>("bump", 100);
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
-    path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
+    ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
+                          static_cast<std::size_t>(config_.path_length));
     plan_pub_ = nh.advertise<visualization_msgs::Marker>("floor_plan", 1, true);
     if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
     cmd_sub_ = nh.subscribe("cmd_vel", 10, &ClosedLoopSimulatorNodelet::onCommand, this);
@@ -179,36 +175,10 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
 
   void publishGroundTruth(const ros::Time& stamp) {
     const Eigen::Vector3d p = toMap(simulator_->pose());
-    const ebslam::StampedPose camera = ebslam::se2ToFloorPose(0.0, p.x(), p.y(), p.z());
-    geometry_msgs::PoseStamped msg;
-    msg.header.stamp = stamp;
-    msg.header.frame_id = config_.map_frame;
-    msg.pose.position.x = camera.position.x();
-    msg.pose.position.y = camera.position.y();
-    msg.pose.position.z = camera.position.z();
-    msg.pose.orientation.x = camera.orientation.x();
-    msg.pose.orientation.y = camera.orientation.y();
-    msg.pose.orientation.z = camera.orientation.z();
-    msg.pose.orientation.w = camera.orientation.w();
-    pose_pub_.publish(msg);
-    geometry_msgs::TransformStamped tf;
-    tf.header = msg.header;
-    tf.child_frame_id = config_.ground_truth_frame;
-    tf.transform.translation.x = msg.pose.position.x;
-    tf.transform.translation.y = msg.pose.position.y;
-    tf.transform.translation.z = msg.pose.position.z;
-    tf.transform.rotation = msg.pose.orientation;
-    tf_broadcaster_.sendTransform(tf);
-    path_.push_back(msg);
-    while (path_.size() > static_cast<std::size_t>(config_.path_length)) path_.pop_front();
     const ros::WallTime now = ros::WallTime::now();
-    if (path_pub_.getNumSubscribers() > 0 && (now - last_path_).toSec() >= 1.0) {
-      last_path_ = now;
-      nav_msgs::Path path;
-      path.header = msg.header;
-      path.poses.assign(path_.begin(), path_.end());
-      path_pub_.publish(path);
-    }
+    const bool path_due = (now - last_path_).toSec() >= 1.0;
+    if (path_due) last_path_ = now;
+    ground_truth_->publish(ebslam::se2ToFloorPose(0.0, p.x(), p.y(), p.z()), stamp, path_due);
   }
 
   void publishFloorPlan(const ros::Time& stamp) {
@@ -245,10 +215,9 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   double command_time_s_ = 0.0;  // simulated time of the last command's arrival [s]
   double sim_time_s_ = 0.0;
   ros::WallTime warned_, last_path_;
-  std::deque<geometry_msgs::PoseStamped> path_;
   ros::Subscriber cmd_sub_;
-  ros::Publisher events_pub_, bump_pub_, pose_pub_, path_pub_, plan_pub_, clock_pub_;
-  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  ros::Publisher events_pub_, bump_pub_, plan_pub_, clock_pub_;
+  std::optional<GroundTruthPublisher> ground_truth_;
   std::atomic<bool> stop_{false};
   std::thread worker_;
 };

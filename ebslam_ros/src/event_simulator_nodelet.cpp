@@ -17,16 +17,10 @@
 // t / ~speed, as the event file player). Pacing: the message for t is sent at
 // wall_start + t / ~speed (or as soon as simulated when the simulator is slower than that).
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
-#include <geometry_msgs/PoseStamped.h>
-#include <geometry_msgs/TransformStamped.h>
-#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
-#include <rosgraph_msgs/Clock.h>
-#include <tf2_ros/transform_broadcaster.h>
 
-#include <ebslam/event_clock.h>
 #include <ebslam/simulator.h>
 #include <ebslam/simulator_scenes.h>
 #include <ebslam/trajectory.h>
@@ -34,13 +28,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <atomic>
-#include <deque>
 #include <memory>
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 #include <thread>
 
-#include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/ground_truth_publisher.h"
+#include "ebslam_ros/paced_event_publisher.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -53,8 +48,6 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   }
 
  private:
-  struct Stopped {};  // thrown from the sink to end the simulation early
-
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
     const std::string default_scenario =
@@ -67,10 +60,20 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
       return;
     }
     ros::NodeHandle& nh = getNodeHandle();
-    events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
-    path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
-    if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
+                          static_cast<std::size_t>(config_.path_length));
+    PacedEventOptions options;
+    options.speed = config_.speed;
+    options.publish_rate_hz = config_.publish_rate_hz;
+    options.publish_clock = config_.publish_clock;
+    options.clock_start_s = config_.clock_start_s;
+    options.wait_for_subscribers = config_.wait_for_subscribers;
+    options.frame_id = config_.frame_id;
+    options.sensor = {static_cast<std::uint32_t>(config_.simulator.camera.width),
+                      static_cast<std::uint32_t>(config_.simulator.camera.height)};
+    events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
+      publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
+    });
     NODELET_INFO("simulating '%s'%s%s from %.2f to %.2f s at %.2fx%s%s", config_.trajectory.c_str(),
                  config_.scenario.empty() ? "" : " (scenario ",
                  config_.scenario.empty() ? "" : (config_.scenario + ")").c_str(),
@@ -128,23 +131,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void run() {
-    if (config_.wait_for_subscribers) {
-      // roscpp counts a subscriber before its side of the connection is ready.
-      while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
-      ros::WallDuration(0.5).sleep();
-    }
-    if (stop_) return;
-    const double stamp_speed = config_.publish_clock ? 1.0 : config_.speed;
-    const ros::Time anchor_time =
-        config_.publish_clock ? ros::Time(config_.clock_start_s) : ros::Time::now();
-    // Stream time of the simulator is round(t_s * 1e6) on the trajectory clock.
-    clock_ = ebslam::EventClock(stamp_speed);
-    clock_.anchor(std::llround(t_begin_ * 1e6), ebslam_msgs::toMicroseconds(anchor_time));
-    wall_start_ = ros::WallTime::now();
-    next_boundary_us_ = std::llround(t_begin_ * 1e6) + periodUs();
-    if (config_.publish_clock) publishClock(anchor_time);
-    const ebslam::SensorSize sensor{static_cast<std::uint32_t>(config_.simulator.camera.width),
-                                    static_cast<std::uint32_t>(config_.simulator.camera.height)};
+    if (!events_->start(std::llround(t_begin_ * 1e6))) return;
     try {
       std::size_t signal = 0, noise = 0;
       for (int pass = 0;; ++pass) {
@@ -153,95 +140,33 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
         pass_end_ = t_end_ + offset;
         ebslam::SimulatorConfig config = config_.simulator;
         config.events.seed += static_cast<std::uint64_t>(pass);
+        // Stream time of the simulator is round(t_s * 1e6) on the trajectory clock.
         const ebslam::SimulationResult result = ebslam::EventSimulator(config).simulate(
             scene_, pass_path_, t_begin_ + offset, pass_end_,
             [&](const ebslam::EventVector& events) {
-              if (stop_) throw Stopped{};
-              for (const ebslam::Event& e : events) {
-                while (e.t_us >= next_boundary_us_) flush(sensor);
-                pending_.push_back(e);
-              }
+              if (stop_) throw PacedEventPublisher::Stopped{};
+              for (const ebslam::Event& e : events) events_->add(e);
             });
         signal += result.signal_events;
         noise += result.noise_events;
         if (!config_.loop) break;
         if (pass % 10 == 9) {
           NODELET_INFO("simulated %d passes: %zu events in %u messages", pass + 1, signal + noise,
-                       sequence_);
+                       events_->messages());
         }
       }
-      flush(sensor);
+      events_->sendNext();
       NODELET_INFO("simulation done: %zu events (%zu signal, %zu noise) in %u messages",
-                   signal + noise, signal, noise, sequence_);
-    } catch (const Stopped&) {
+                   signal + noise, signal, noise, events_->messages());
+    } catch (const PacedEventPublisher::Stopped&) {
     } catch (const std::exception& error) {
       NODELET_ERROR("simulation failed: %s", error.what());
     }
   }
 
-  std::int64_t periodUs() const { return std::llround(1e6 / config_.publish_rate_hz); }
-
-  // Publishes the events before next_boundary_us_ (the message's end) once its time has come.
-  void flush(const ebslam::SensorSize& sensor) {
-    const std::int64_t end_us = next_boundary_us_;
-    next_boundary_us_ += periodUs();
-    const double t_end_s = 1e-6 * static_cast<double>(end_us);
-    const ros::WallTime due = wall_start_ + ros::WallDuration((t_end_s - t_begin_) / config_.speed);
-    while (!stop_) {
-      const ros::WallTime now = ros::WallTime::now();
-      if (now >= due) break;
-      (due - now).sleep();
-    }
-    if (stop_) throw Stopped{};
-    const ros::Time stamp_end = ebslam_msgs::toRosTime(clock_.map(end_us).value_or(-1));
-    if (config_.publish_clock) publishClock(stamp_end);
-    if (!pending_.empty()) {
-      for (ebslam::Event& e : pending_) e.t_us = clock_.stamp(e.t_us).value_or(-1);
-      ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(pending_, sensor, config_.frame_id);
-      msg.header.seq = sequence_++;
-      events_pub_.publish(msg);
-      pending_.clear();
-    }
-    publishGroundTruth(std::min(t_end_s, pass_end_), stamp_end);
-  }
-
-  void publishClock(const ros::Time& time) {
-    rosgraph_msgs::Clock clock;
-    clock.clock = time;
-    clock_pub_.publish(clock);
-  }
-
   void publishGroundTruth(double t_s, const ros::Time& stamp) {
-    const ebslam::StampedPose pose = ebslam::interpolatePose(pass_path_, t_s);
-    geometry_msgs::PoseStamped msg;
-    msg.header.stamp = stamp;
-    msg.header.frame_id = config_.map_frame;
-    msg.pose.position.x = pose.position.x();
-    msg.pose.position.y = pose.position.y();
-    msg.pose.position.z = pose.position.z();
-    msg.pose.orientation.x = pose.orientation.x();
-    msg.pose.orientation.y = pose.orientation.y();
-    msg.pose.orientation.z = pose.orientation.z();
-    msg.pose.orientation.w = pose.orientation.w();
-    pose_pub_.publish(msg);
-    geometry_msgs::TransformStamped tf;
-    tf.header = msg.header;
-    tf.child_frame_id = config_.ground_truth_frame;
-    tf.transform.translation.x = msg.pose.position.x;
-    tf.transform.translation.y = msg.pose.position.y;
-    tf.transform.translation.z = msg.pose.position.z;
-    tf.transform.rotation = msg.pose.orientation;
-    tf_broadcaster_.sendTransform(tf);
-    ground_truth_path_.push_back(msg);
-    while (ground_truth_path_.size() > static_cast<std::size_t>(config_.path_length)) {
-      ground_truth_path_.pop_front();
-    }
-    if (path_pub_.getNumSubscribers() > 0 && sequence_ % 10 == 0) {
-      nav_msgs::Path path;
-      path.header = msg.header;
-      path.poses.assign(ground_truth_path_.begin(), ground_truth_path_.end());
-      path_pub_.publish(path);
-    }
+    ground_truth_->publish(ebslam::interpolatePose(pass_path_, t_s), stamp,
+                           events_->messages() % 10 == 0);
   }
 
   EventSimulatorNodeConfig config_;
@@ -250,15 +175,9 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   ebslam::Trajectory reversed_path_;  // path_ driven backwards over [t_begin_, t_end_]
   ebslam::Trajectory pass_path_;      // the path of the pass being simulated
   double t_begin_ = 0.0, t_end_ = 0.0;
-  double pass_end_ = 0.0;     // end of the pass being simulated [s, trajectory clock]
-  ebslam::EventClock clock_;  // simulated time -> ROS time
-  ros::WallTime wall_start_;
-  std::int64_t next_boundary_us_ = 0;
-  ebslam::EventVector pending_;
-  std::uint32_t sequence_ = 0;
-  std::deque<geometry_msgs::PoseStamped> ground_truth_path_;
-  ros::Publisher events_pub_, pose_pub_, path_pub_, clock_pub_;
-  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  double pass_end_ = 0.0;  // end of the pass being simulated [s, trajectory clock]
+  std::optional<PacedEventPublisher> events_;
+  std::optional<GroundTruthPublisher> ground_truth_;
   std::atomic<bool> stop_{false};
   std::thread worker_;
 };

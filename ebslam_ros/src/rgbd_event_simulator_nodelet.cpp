@@ -16,35 +16,30 @@
 // EventSimulator). Pacing: the message for t is sent at wall_start + (t - start) / ~speed, or as
 // soon as simulated when the simulator is slower. Seeded (~seed): the same run every time.
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
-#include <geometry_msgs/PoseStamped.h>
-#include <geometry_msgs/TransformStamped.h>
-#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
-#include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
-#include <tf2_ros/transform_broadcaster.h>
 
 #include <ebslam/dedvs_io.h>
 #include <ebslam/dedvs_scene.h>
 #include <ebslam/dedvs_simulator.h>
-#include <ebslam/event_clock.h>
 #include <ebslam/trajectory.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <memory>
+#include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 #include <thread>
 
-#include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/ground_truth_publisher.h"
+#include "ebslam_ros/paced_event_publisher.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -90,8 +85,6 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   }
 
  private:
-  struct Stopped {};  // thrown from the sinks to end the simulation early
-
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
     const std::string default_trajectory =
@@ -104,14 +97,24 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
       return;
     }
     ros::NodeHandle& nh = getNodeHandle();
-    events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 10);
     depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth_registered/camera_info", 10);
     colour_pub_ = nh.advertise<sensor_msgs::Image>("rgb/image_rect_color", 10);
     colour_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("rgb/camera_info", 10);
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("ground_truth/pose", 100);
-    path_pub_ = nh.advertise<nav_msgs::Path>("ground_truth/path", 1, true);
-    if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
+                          static_cast<std::size_t>(config_.path_length));
+    PacedEventOptions options;
+    options.speed = config_.speed;
+    options.publish_rate_hz = config_.publish_rate_hz;
+    options.publish_clock = config_.publish_clock;
+    options.clock_start_s = config_.clock_start_s;
+    options.wait_for_subscribers = config_.wait_for_subscribers;
+    options.frame_id = config_.edvs_frame;
+    options.sensor = {static_cast<std::uint32_t>(config_.simulator.edvs.width),
+                      static_cast<std::uint32_t>(config_.simulator.edvs.height)};
+    events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
+      publishGroundTruth(std::min(t_end_s, t_end_), stamp);
+    });
     NODELET_INFO("simulating the D-eDVS along '%s' from %.2f to %.2f s at %.2fx%s (%zu planes)",
                  config_.trajectory.c_str(), t_begin_ - path_.front().t_s,
                  t_end_ - path_.front().t_s, config_.speed,
@@ -140,80 +143,31 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void run() {
-    if (config_.wait_for_subscribers) {
-      // roscpp counts a subscriber before its side of the connection is ready.
-      while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
-      ros::WallDuration(0.5).sleep();
-    }
-    if (stop_) return;
-    const double stamp_speed = config_.publish_clock ? 1.0 : config_.speed;
-    const ros::Time anchor_time =
-        config_.publish_clock ? ros::Time(config_.clock_start_s) : ros::Time::now();
-    clock_ = ebslam::EventClock(stamp_speed);
-    clock_.anchor(std::llround(t_begin_ * 1e6), ebslam_msgs::toMicroseconds(anchor_time));
-    wall_start_ = ros::WallTime::now();
-    next_boundary_us_ = std::llround(t_begin_ * 1e6) + periodUs();
-    if (config_.publish_clock) publishClock(anchor_time);
-    const ebslam::SensorSize sensor{static_cast<std::uint32_t>(config_.simulator.edvs.width),
-                                    static_cast<std::uint32_t>(config_.simulator.edvs.height)};
+    if (!events_->start(std::llround(t_begin_ * 1e6))) return;
     try {
       const ebslam::DedvsRun result = simulator_->simulate(
           scene_, path_, t_begin_, t_end_,
           [&](const std::vector<ebslam::TrueDepthEvent>& events) {
-            if (stop_) throw Stopped{};
-            for (const ebslam::TrueDepthEvent& e : events) {
-              while (e.event.t_us >= next_boundary_us_) flush(sensor);
-              pending_.push_back(e.event);
-            }
+            if (stop_) throw PacedEventPublisher::Stopped{};
+            for (const ebslam::TrueDepthEvent& e : events) events_->add(e.event);
           },
           [&](const ebslam::DepthFrame& frame) {
-            if (stop_) throw Stopped{};
+            if (stop_) throw PacedEventPublisher::Stopped{};
             // Events up to the exposure go out first (pacing), then the frame.
-            while (std::llround(frame.t_s * 1e6) >= next_boundary_us_) flush(sensor);
+            events_->sendUntil(std::llround(frame.t_s * 1e6));
             publishFrame(frame);
           });
       // The last message ends at ~t_end (a depth frame there may have sent it already).
-      const std::int64_t end_us = std::llround(t_end_ * 1e6);
-      if (last_end_us_ < end_us || !pending_.empty()) {
-        next_boundary_us_ = std::min(next_boundary_us_, end_us);
-        flush(sensor);
-      }
+      events_->finish(std::llround(t_end_ * 1e6));
       NODELET_INFO(
           "simulation done: %zu events (%zu signal, %zu noise) in %u messages, %u depth "
           "frames",
           result.signal_events + result.noise_events, result.signal_events, result.noise_events,
-          sequence_, frames_);
-    } catch (const Stopped&) {
+          events_->messages(), frames_);
+    } catch (const PacedEventPublisher::Stopped&) {
     } catch (const std::exception& error) {
       NODELET_ERROR("simulation failed: %s", error.what());
     }
-  }
-
-  std::int64_t periodUs() const { return std::llround(1e6 / config_.publish_rate_hz); }
-
-  // Publishes the events before next_boundary_us_ (the message's end) once its time has come.
-  void flush(const ebslam::SensorSize& sensor) {
-    const std::int64_t end_us = next_boundary_us_;
-    last_end_us_ = end_us;
-    next_boundary_us_ += periodUs();
-    const double t_end_s = 1e-6 * static_cast<double>(end_us);
-    const ros::WallTime due = wall_start_ + ros::WallDuration((t_end_s - t_begin_) / config_.speed);
-    while (!stop_) {
-      const ros::WallTime now = ros::WallTime::now();
-      if (now >= due) break;
-      (due - now).sleep();
-    }
-    if (stop_) throw Stopped{};
-    const ros::Time stamp_end = ebslam_msgs::toRosTime(clock_.map(end_us).value_or(-1));
-    if (config_.publish_clock) publishClock(stamp_end);
-    if (!pending_.empty()) {
-      for (ebslam::Event& e : pending_) e.t_us = clock_.stamp(e.t_us).value_or(-1);
-      ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(pending_, sensor, config_.edvs_frame);
-      msg.header.seq = sequence_++;
-      events_pub_.publish(msg);
-      pending_.clear();
-    }
-    publishGroundTruth(std::min(t_end_s, t_end_), stamp_end);
   }
 
   void publishFrame(const ebslam::DepthFrame& frame) {
@@ -221,8 +175,7 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     header.seq = frames_++;
     header.frame_id = config_.depth_frame;
     // The depth camera's own clock (exposure + offset), mapped as the event clock.
-    header.stamp =
-        ebslam_msgs::toRosTime(clock_.map(std::llround(frame.stamp_s * 1e6)).value_or(-1));
+    header.stamp = events_->rosTime(std::llround(frame.stamp_s * 1e6));
     const sensor_msgs::CameraInfo info = cameraInfoOf(config_.simulator.depth.camera, header);
     depth_pub_.publish(imageOf(frame.depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
     depth_info_pub_.publish(info);
@@ -232,43 +185,9 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     colour_info_pub_.publish(info);
   }
 
-  void publishClock(const ros::Time& time) {
-    rosgraph_msgs::Clock clock;
-    clock.clock = time;
-    clock_pub_.publish(clock);
-  }
-
   void publishGroundTruth(double t_s, const ros::Time& stamp) {
-    const ebslam::StampedPose pose = ebslam::interpolatePose(path_, t_s);
-    geometry_msgs::PoseStamped msg;
-    msg.header.stamp = stamp;
-    msg.header.frame_id = config_.map_frame;
-    msg.pose.position.x = pose.position.x();
-    msg.pose.position.y = pose.position.y();
-    msg.pose.position.z = pose.position.z();
-    msg.pose.orientation.x = pose.orientation.x();
-    msg.pose.orientation.y = pose.orientation.y();
-    msg.pose.orientation.z = pose.orientation.z();
-    msg.pose.orientation.w = pose.orientation.w();
-    pose_pub_.publish(msg);
-    geometry_msgs::TransformStamped tf;
-    tf.header = msg.header;
-    tf.child_frame_id = config_.ground_truth_frame;
-    tf.transform.translation.x = msg.pose.position.x;
-    tf.transform.translation.y = msg.pose.position.y;
-    tf.transform.translation.z = msg.pose.position.z;
-    tf.transform.rotation = msg.pose.orientation;
-    tf_broadcaster_.sendTransform(tf);
-    ground_truth_path_.push_back(msg);
-    while (ground_truth_path_.size() > static_cast<std::size_t>(config_.path_length)) {
-      ground_truth_path_.pop_front();
-    }
-    if (path_pub_.getNumSubscribers() > 0 && sequence_ % 10 == 0) {
-      nav_msgs::Path path;
-      path.header = msg.header;
-      path.poses.assign(ground_truth_path_.begin(), ground_truth_path_.end());
-      path_pub_.publish(path);
-    }
+    ground_truth_->publish(ebslam::interpolatePose(path_, t_s), stamp,
+                           events_->messages() % 10 == 0);
   }
 
   RgbdEventSimulatorNodeConfig config_;
@@ -276,16 +195,10 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   ebslam::Scene scene_;
   std::unique_ptr<ebslam::DedvsSimulator> simulator_;
   double t_begin_ = 0.0, t_end_ = 0.0;  // trajectory clock [s]
-  ebslam::EventClock clock_;            // simulated time -> ROS time
-  ros::WallTime wall_start_;
-  std::int64_t next_boundary_us_ = 0;
-  std::int64_t last_end_us_ = 0;  // end of the last message sent [us, trajectory clock]
-  ebslam::EventVector pending_;
-  std::uint32_t sequence_ = 0, frames_ = 0;
-  std::deque<geometry_msgs::PoseStamped> ground_truth_path_;
-  ros::Publisher events_pub_, depth_pub_, depth_info_pub_, colour_pub_, colour_info_pub_, pose_pub_,
-      path_pub_, clock_pub_;
-  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  std::uint32_t frames_ = 0;
+  ros::Publisher depth_pub_, depth_info_pub_, colour_pub_, colour_info_pub_;
+  std::optional<PacedEventPublisher> events_;
+  std::optional<GroundTruthPublisher> ground_truth_;
   std::atomic<bool> stop_{false};
   std::thread worker_;
 };

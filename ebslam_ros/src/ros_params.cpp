@@ -2,6 +2,8 @@
 
 #include "ebslam_ros/flat_yaml.h"
 
+#include <ebslam_msgs/ros_param_helpers.h>
+
 #include <ebslam/dedvs_io.h>
 
 #include <algorithm>
@@ -17,22 +19,11 @@
 namespace ebslam_ros {
 namespace {
 
-template <typename T>
-T param(const ros::NodeHandle& nh, const std::string& name, const T& default_value) {
-  T value;
-  nh.param<T>(name, value, default_value);
-  return value;
-}
-
-void requirePositive(double value, const ros::NodeHandle& nh, const std::string& name) {
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw std::invalid_argument("parameter " + nh.resolveName(name) + " = " +
-                                std::to_string(value) + " must be a positive number");
-  }
-}
+using ebslam_msgs::param;
+using ebslam_msgs::requirePositive;
 
 [[noreturn]] void fail(const ros::NodeHandle& nh, const std::string& name, const std::string& why) {
-  throw std::invalid_argument("parameter " + nh.resolveName(name) + " " + why);
+  ebslam_msgs::failParam(nh, name, why);
 }
 
 std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
@@ -116,11 +107,12 @@ ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& nh,
   return f;
 }
 
-PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
-  PoseFilterNodeConfig config;
-  config.sensor = loadCeilingSensorConfig(nh);
-  const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
-  config.initial_pose = {start[0], start[1], start[2]};
+namespace {
+
+// The frames, tf and input-timing parameters that the pose nodelets share (PoseFilterNodeConfig,
+// EventSlam3dNodeConfig), loaded and validated.
+template <typename PoseNodeConfig>
+void loadPoseNodeFramesAndInput(const ros::NodeHandle& nh, PoseNodeConfig& config) {
   config.map_frame = param<std::string>(nh, "map_frame", config.map_frame);
   config.odom_frame = param<std::string>(nh, "odom_frame", config.odom_frame);
   config.base_frame = param<std::string>(nh, "base_frame", config.base_frame);
@@ -141,7 +133,8 @@ PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
   requireFrame(nh, "base_frame", config.base_frame);
   requireFrame(nh, "sensor_frame", config.sensor_frame);
   if (config.map_frame == config.odom_frame || config.odom_frame == config.base_frame ||
-      config.base_frame == config.sensor_frame || config.map_frame == config.base_frame) {
+      config.base_frame == config.sensor_frame || config.map_frame == config.base_frame ||
+      config.map_frame == config.sensor_frame || config.odom_frame == config.sensor_frame) {
     fail(nh, "map_frame", "odom_frame, base_frame and sensor_frame must be four different frames");
   }
   if (config.path_length < 1) fail(nh, "path_length", "must be at least 1");
@@ -151,6 +144,16 @@ PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
   }
   requirePositive(config.gap_warning_s, nh, "gap_warning");
   if (config.max_events_per_update < 1000) fail(nh, "max_events_per_update", "must be >= 1000");
+}
+
+}  // namespace
+
+PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
+  PoseFilterNodeConfig config;
+  config.sensor = loadCeilingSensorConfig(nh);
+  const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
+  config.initial_pose = {start[0], start[1], start[2]};
+  loadPoseNodeFramesAndInput(nh, config);
   config.denoise = param<bool>(nh, "denoise", config.denoise);
   config.denoiser = loadBackgroundActivityFilterConfig(ros::NodeHandle(nh, "denoiser"));
   return config;
@@ -251,41 +254,11 @@ EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
   } else if (nh.hasParam("initial_pose")) {
     fail(nh, "initial_pose", "must be a list [x, y, z, roll, pitch, yaw]");
   }
-  config.map_frame = param<std::string>(nh, "map_frame", config.map_frame);
-  config.odom_frame = param<std::string>(nh, "odom_frame", config.odom_frame);
-  config.base_frame = param<std::string>(nh, "base_frame", config.base_frame);
-  config.sensor_frame = param<std::string>(nh, "sensor_frame", config.sensor_frame);
-  config.odom_from_tf = param<bool>(nh, "odom_from_tf", config.odom_from_tf);
-  config.mount_from_tf = param<bool>(nh, "mount_from_tf", config.mount_from_tf);
-  config.mount_xyz = triple(nh, "mount_xyz", config.mount_xyz);
-  config.mount_rpy = triple(nh, "mount_rpy", config.mount_rpy);
-  config.publish_tf = param<bool>(nh, "publish_tf", config.publish_tf);
-  config.path_length = param<int>(nh, "path_length", config.path_length);
-  config.queue_size = param<int>(nh, "queue_size", config.queue_size);
-  config.max_backward_s = param<double>(nh, "max_backward", config.max_backward_s);
-  config.gap_warning_s = param<double>(nh, "gap_warning", config.gap_warning_s);
-  config.max_events_per_update =
-      param<int>(nh, "max_events_per_update", config.max_events_per_update);
+  loadPoseNodeFramesAndInput(nh, config);
   config.map_threshold = param<double>(nh, "map_threshold", config.map_threshold);
   config.map_publish_period_s =
       param<double>(nh, "map_publish_period", config.map_publish_period_s);
   config.map_file = param<std::string>(nh, "map_file", config.map_file);
-  requireFrame(nh, "map_frame", config.map_frame);
-  requireFrame(nh, "odom_frame", config.odom_frame);
-  requireFrame(nh, "base_frame", config.base_frame);
-  requireFrame(nh, "sensor_frame", config.sensor_frame);
-  if (config.map_frame == config.odom_frame || config.odom_frame == config.base_frame ||
-      config.base_frame == config.sensor_frame || config.map_frame == config.base_frame ||
-      config.map_frame == config.sensor_frame || config.odom_frame == config.sensor_frame) {
-    fail(nh, "map_frame", "odom_frame, base_frame and sensor_frame must be four different frames");
-  }
-  if (config.path_length < 1) fail(nh, "path_length", "must be at least 1");
-  if (config.queue_size < 1) fail(nh, "queue_size", "must be at least 1");
-  if (!std::isfinite(config.max_backward_s) || config.max_backward_s < 0.0) {
-    fail(nh, "max_backward", "must be a non-negative number of seconds");
-  }
-  requirePositive(config.gap_warning_s, nh, "gap_warning");
-  if (config.max_events_per_update < 1000) fail(nh, "max_events_per_update", "must be >= 1000");
   if (!std::isfinite(config.map_threshold) || config.map_threshold < 0.0) {
     fail(nh, "map_threshold", "must be a non-negative number");
   }

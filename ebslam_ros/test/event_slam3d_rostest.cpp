@@ -38,6 +38,8 @@
 
 #include "ebslam_msgs/event_conversions.h"
 
+#include "rostest_util.h"
+
 namespace {
 
 constexpr std::int64_t kT0 = 1700000000000000;  // event time of the path's start [us]
@@ -150,20 +152,10 @@ class EventSlam3dTest : public ::testing::Test {
   void SetUp() override {
     events_pub_ = nh_.advertise<ebslam_msgs::DepthEventArray>("depth_events", 100);
     pose_sub_ = nh_.subscribe("pose", 1000, &EventSlam3dTest::onPose, this);
-    waitFor([&] { return events_pub_.getNumSubscribers() > 0; }, 20.0);
+    ebslam_ros_test::spinUntil([&] { return events_pub_.getNumSubscribers() > 0; }, 20.0);
     ASSERT_GT(events_pub_.getNumSubscribers(), 0u) << "the nodelet did not subscribe";
-    waitFor([&] { return pose_sub_.getNumPublishers() > 0; }, 20.0);
+    ebslam_ros_test::spinUntil([&] { return pose_sub_.getNumPublishers() > 0; }, 20.0);
     ros::WallDuration(0.3).sleep();
-  }
-
-  template <typename Predicate>
-  static bool waitFor(Predicate done, double seconds) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-    while (!done() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      ros::WallDuration(0.005).sleep();
-    }
-    return done();
   }
 
   void onPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
@@ -187,7 +179,8 @@ class EventSlam3dTest : public ::testing::Test {
   bool publishAndAwait(const ebslam_msgs::DepthEventArray& msg, ros::Time stamp = ros::Time()) {
     if (stamp.isZero()) stamp = msg.events.back().ts;
     events_pub_.publish(msg);
-    return waitFor([&] { return !poses_.empty() && poses_.back().header.stamp == stamp; }, 60.0);
+    return ebslam_ros_test::spinUntil(
+        [&] { return !poses_.empty() && poses_.back().header.stamp == stamp; }, 60.0);
   }
 
   // Feeds the scene's events of path time [t0_s, t1_s) with path time 0 at t0_us; returns the
@@ -229,7 +222,7 @@ class EventSlam3dTest : public ::testing::Test {
     // The second update after now holds every message processed before now.
     for (int k = 0; k < 2; ++k) {
       latest.status.clear();
-      EXPECT_TRUE(waitFor([&] { return !latest.status.empty(); }, 20.0));
+      EXPECT_TRUE(ebslam_ros_test::spinUntil([&] { return !latest.status.empty(); }, 20.0));
     }
     if (!latest.status.empty()) {
       for (const auto& kv : latest.status[0].values) values[kv.key] = kv.value;
@@ -253,7 +246,7 @@ TEST_F(EventSlam3dTest, TracksThePathWithEventStampsFramesAndLazyOutputs) {
       [&](const geometry_msgs::PoseArray::ConstPtr& m) { particles.push_back(*m); });
   auto path_sub = nh_.subscribe<nav_msgs::Path>(
       "path", 10, [&](const nav_msgs::Path::ConstPtr& m) { paths.push_back(*m); });
-  ASSERT_TRUE(waitFor(
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
       [&] { return particles_sub.getNumPublishers() > 0 && path_sub.getNumPublishers() > 0; },
       20.0));
   ros::WallDuration(0.3).sleep();
@@ -287,7 +280,8 @@ TEST_F(EventSlam3dTest, TracksThePathWithEventStampsFramesAndLazyOutputs) {
     for (int j = 0; j < 6; ++j) EXPECT_DOUBLE_EQ(c[6 * i + j], c[6 * j + i]);
   }
 
-  ASSERT_TRUE(waitFor([&] { return !particles.empty() && !paths.empty(); }, 10.0));
+  ASSERT_TRUE(
+      ebslam_ros_test::spinUntil([&] { return !particles.empty() && !paths.empty(); }, 10.0));
   EXPECT_EQ(particles.back().header.frame_id, "map");
   EXPECT_EQ(static_cast<int>(particles.back().poses.size()), kParticles);
   EXPECT_EQ(stamps.count(ebslam_msgs::toMicroseconds(particles.back().header.stamp)), 1u);
@@ -299,7 +293,7 @@ TEST_F(EventSlam3dTest, TracksThePathWithEventStampsFramesAndLazyOutputs) {
   // frame moved to the sensor's start pose).
   auto map_sub = nh_.subscribe<sensor_msgs::PointCloud2>(
       "map", 2, [&](const sensor_msgs::PointCloud2::ConstPtr& m) { clouds.push_back(*m); });
-  ASSERT_TRUE(waitFor([&] { return !clouds.empty(); }, 20.0)) << "no map cloud";
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !clouds.empty(); }, 20.0)) << "no map cloud";
   const sensor_msgs::PointCloud2& cloud = clouds.back();
   EXPECT_EQ(cloud.header.frame_id, "map");
   EXPECT_EQ(ebslam_msgs::toMicroseconds(cloud.header.stamp), t0 + scene().events.back().t_us);
@@ -342,16 +336,9 @@ TEST_F(EventSlam3dTest, TfTreeRunsMapOdomBaseLinkSensor) {
   feed(0.0, 0.4, g_next_t);
   ASSERT_FALSE(poses_.empty());
   const ros::Time stamp = poses_.back().header.stamp;
-  ASSERT_TRUE(
-      waitFor([&] { return buffer.canTransform("map", "edvs_optical_frame", stamp); }, 20.0));
-  std::string parent;
-  ASSERT_TRUE(buffer._getParent("edvs_optical_frame", stamp, parent));
-  EXPECT_EQ(parent, "base_link");
-  ASSERT_TRUE(buffer._getParent("base_link", stamp, parent));
-  EXPECT_EQ(parent, "odom");
-  ASSERT_TRUE(buffer._getParent("odom", stamp, parent));
-  EXPECT_EQ(parent, "map");
-  EXPECT_FALSE(buffer._getParent("map", stamp, parent));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return buffer.canTransform("map", "edvs_optical_frame", stamp); }, 20.0));
+  ASSERT_NO_FATAL_FAILURE(ebslam_ros_test::checkRep105Chain(buffer, "edvs_optical_frame", stamp));
   const auto base = buffer.lookupTransform("map", "base_link", stamp);
   EXPECT_NEAR(base.transform.translation.x, poses_.back().pose.pose.position.x, 1e-9);
   EXPECT_NEAR(base.transform.translation.z, poses_.back().pose.pose.position.z, 1e-9);
@@ -520,10 +507,11 @@ TEST_F(EventSlam3dTest, ResetSaveMapAndKnobs) {
   auto particles_sub = nh_.subscribe<geometry_msgs::PoseArray>(
       "particles", 10,
       [&](const geometry_msgs::PoseArray::ConstPtr& m) { particles.push_back(*m); });
-  ASSERT_TRUE(waitFor([&] { return particles_sub.getNumPublishers() > 0; }, 20.0));
+  ASSERT_TRUE(
+      ebslam_ros_test::spinUntil([&] { return particles_sub.getNumPublishers() > 0; }, 20.0));
   ros::WallDuration(0.3).sleep();
   feed(1.0, 2.0, t0);
-  ASSERT_TRUE(waitFor([&] { return !particles.empty(); }, 10.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !particles.empty(); }, 10.0));
   EXPECT_EQ(particles.back().poses.size(), 150u);
   expectNearTruth(t0, 0.05, 3.0 * M_PI / 180.0);
 

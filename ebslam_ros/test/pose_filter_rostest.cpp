@@ -30,6 +30,8 @@
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ceiling_map_io.h"
 
+#include "rostest_util.h"
+
 namespace {
 
 // The scene of test/data/ceiling_lines.yaml and the default camera (f = 2.59 / 0.03 px,
@@ -72,19 +74,9 @@ class PoseFilterTest : public ::testing::Test {
     pose_sub_ = nh_.subscribe("pose", 1000, &PoseFilterTest::onPose, this);
     pixels_ = edgePixels(kStartX, kStartY, kStartTheta);
     ASSERT_GT(pixels_.size(), 500u);
-    waitFor([&] { return events_pub_.getNumSubscribers() > 0; }, 10.0);
+    ebslam_ros_test::spinUntil([&] { return events_pub_.getNumSubscribers() > 0; }, 10.0);
     ASSERT_GT(events_pub_.getNumSubscribers(), 0u) << "the filter nodelet did not subscribe";
     ros::WallDuration(0.3).sleep();
-  }
-
-  template <typename Predicate>
-  static bool waitFor(Predicate done, double seconds) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-    while (!done() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      ros::WallDuration(0.005).sleep();
-    }
-    return done();
   }
 
   void onPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
@@ -114,7 +106,8 @@ class PoseFilterTest : public ::testing::Test {
   bool publishAndAwait(const ebslam_msgs::EventArray& msg, double seconds = 5.0) {
     events_pub_.publish(msg);
     const ros::Time stamp = msg.events.back().ts;
-    return waitFor([&] { return !poses_.empty() && poses_.back().header.stamp == stamp; }, seconds);
+    return ebslam_ros_test::spinUntil(
+        [&] { return !poses_.empty() && poses_.back().header.stamp == stamp; }, seconds);
   }
 
   // Publishes `n` messages of 2000 events at 100 Hz of event time from t_us; returns the end.
@@ -169,16 +162,9 @@ TEST_F(PoseFilterTest, TfTreeRunsMapOdomBaseLinkSensorWithoutGaps) {
   feed(g_next_t, 10);
   const ros::Time stamp = poses_.back().header.stamp;
   std::string error;
-  ASSERT_TRUE(
-      waitFor([&] { return buffer.canTransform("map", "edvs_optical_frame", stamp); }, 5.0));
-  std::string parent;
-  ASSERT_TRUE(buffer._getParent("edvs_optical_frame", stamp, parent));
-  EXPECT_EQ(parent, "base_link");
-  ASSERT_TRUE(buffer._getParent("base_link", stamp, parent));
-  EXPECT_EQ(parent, "odom");
-  ASSERT_TRUE(buffer._getParent("odom", stamp, parent));
-  EXPECT_EQ(parent, "map");
-  EXPECT_FALSE(buffer._getParent("map", stamp, parent));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return buffer.canTransform("map", "edvs_optical_frame", stamp); }, 5.0));
+  ASSERT_NO_FATAL_FAILURE(ebslam_ros_test::checkRep105Chain(buffer, "edvs_optical_frame", stamp));
   // map -> base_link agrees with the pose, and the sensor sits on the mount.
   const auto base = buffer.lookupTransform("map", "base_link", stamp);
   EXPECT_NEAR(base.transform.translation.x, poses_.back().pose.pose.position.x, 1e-9);
@@ -196,8 +182,8 @@ TEST_F(PoseFilterTest, LazyParticlesAndBoundedPath) {
       [&](const geometry_msgs::PoseArray::ConstPtr& m) { particles.push_back(*m); });
   auto path_sub = nh_.subscribe<nav_msgs::Path>(
       "path", 10, [&](const nav_msgs::Path::ConstPtr& m) { paths.push_back(*m); });
-  waitFor([&] { return particles_sub.getNumPublishers() > 0 && path_sub.getNumPublishers() > 0; },
-          5.0);
+  ebslam_ros_test::spinUntil(
+      [&] { return particles_sub.getNumPublishers() > 0 && path_sub.getNumPublishers() > 0; }, 5.0);
   ros::WallDuration(0.3).sleep();
   int num_particles = 0;
   ros::param::get("~expected_particles", num_particles);
@@ -206,7 +192,7 @@ TEST_F(PoseFilterTest, LazyParticlesAndBoundedPath) {
     t = feed(t, 1);
     ros::WallDuration(0.11).sleep();  // path: at most every 0.1 s
   }
-  waitFor([&] { return !particles.empty() && !paths.empty(); }, 3.0);
+  ebslam_ros_test::spinUntil([&] { return !particles.empty() && !paths.empty(); }, 3.0);
   ASSERT_FALSE(particles.empty());
   EXPECT_EQ(particles.back().header.frame_id, "map");
   EXPECT_EQ(static_cast<int>(particles.back().poses.size()), num_particles);
@@ -296,7 +282,7 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   auto diag_sub = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 10,
       [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) { diagnostics = *m; });
-  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !diagnostics.status.empty(); }, 5.0));
   std::map<std::string, std::string> values;
   for (const auto& kv : diagnostics.status[0].values) values[kv.key] = kv.value;
   EXPECT_EQ(values["messages of a wrong sensor size"], "1");
@@ -339,7 +325,7 @@ TEST_F(PoseFilterTest, DenoiserInsideTheNodeRemovesIsolatedNoise) {
   };
   std::int64_t t = feed(g_next_t, 5);  // warm-up: every edge pixel has fired
   diagnostics.status.clear();
-  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !diagnostics.status.empty(); }, 5.0));
   const std::uint64_t removed0 = value("events removed by the denoiser");
   const std::uint64_t passed0 = value("events passed by the denoiser");
   std::size_t noise = 0, signal = 0;
@@ -362,8 +348,8 @@ TEST_F(PoseFilterTest, DenoiserInsideTheNodeRemovesIsolatedNoise) {
     // The pose carries the last event that passed the denoiser.
     events_pub_.publish(msg);
     const ros::Time first = msg.events.front().ts;
-    ASSERT_TRUE(
-        waitFor([&] { return !poses_.empty() && poses_.back().header.stamp >= first; }, 5.0))
+    ASSERT_TRUE(ebslam_ros_test::spinUntil(
+        [&] { return !poses_.empty() && poses_.back().header.stamp >= first; }, 5.0))
         << "no pose for message " << k;
     EXPECT_LE(poses_.back().header.stamp, msg.header.stamp);
     t += 10000;
@@ -373,7 +359,7 @@ TEST_F(PoseFilterTest, DenoiserInsideTheNodeRemovesIsolatedNoise) {
   // Counters as of the next diagnostics update.
   ros::WallDuration(1.1).sleep();
   diagnostics.status.clear();
-  ASSERT_TRUE(waitFor([&] { return !diagnostics.status.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !diagnostics.status.empty(); }, 5.0));
   for (const auto& kv : diagnostics.status.at(0).values) {
     if (kv.key == "denoiser") {
       EXPECT_EQ(kv.value, "on");
@@ -399,7 +385,7 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   std::vector<sensor_msgs::Image> images;
   auto image_sub = nh.subscribe<sensor_msgs::Image>(
       "map/image", 2, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
-  PoseFilterTest::waitFor([&] { return image_sub.getNumPublishers() > 0; }, 5.0);
+  ebslam_ros_test::spinUntil([&] { return image_sub.getNumPublishers() > 0; }, 5.0);
   ros::WallDuration(0.3).sleep();
   std::int64_t t = g_next_t;
   for (int k = 0; k < 15; ++k) {
@@ -409,7 +395,8 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   nav_msgs::OccupancyGrid grid;
   auto map_sub = nh.subscribe<nav_msgs::OccupancyGrid>(
       "map", 1, [&](const nav_msgs::OccupancyGrid::ConstPtr& m) { grid = *m; });
-  ASSERT_TRUE(PoseFilterTest::waitFor([&] { return !grid.data.empty(); }, 5.0));  // latched
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !grid.data.empty(); },
+                                         5.0));  // latched
   EXPECT_EQ(grid.header.frame_id, "map");
   EXPECT_EQ(grid.data.size(), static_cast<std::size_t>(grid.info.width) * grid.info.height);
   EXPECT_NEAR(grid.info.resolution, 0.03, 1e-6);
@@ -426,7 +413,7 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   EXPECT_GE(on_line, 50);
   EXPECT_EQ(cell(8.0, 8.0), -1);
   EXPECT_LE(ebslam_msgs::toMicroseconds(grid.header.stamp), t);
-  ASSERT_TRUE(PoseFilterTest::waitFor([&] { return !images.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !images.empty(); }, 5.0));
   EXPECT_EQ(images.back().encoding, "mono8");
   EXPECT_EQ(images.back().width, grid.info.width);
   EXPECT_EQ(images.back().header.frame_id, "map");

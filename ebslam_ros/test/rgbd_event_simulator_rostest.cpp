@@ -19,6 +19,8 @@
 #include <cstring>
 #include <vector>
 
+#include "rostest_util.h"
+
 namespace {
 
 TEST(RgbdEventSimulator, PublishesEventsDepthColourGroundTruthAndClock) {
@@ -73,23 +75,8 @@ TEST(RgbdEventSimulator, PublishesEventsDepthColourGroundTruthAndClock) {
   // Events.
   ASSERT_GT(arrays.size(), 50u);
   std::size_t events = 0;
-  ros::Time previous(0);
-  for (const auto& a : arrays) {
-    EXPECT_EQ(a.header.frame_id, "edvs_optical_frame");
-    EXPECT_EQ(a.width, 128u);
-    EXPECT_EQ(a.height, 128u);
-    ASSERT_FALSE(a.events.empty());
-    EXPECT_EQ(a.header.stamp, a.events.back().ts);
-    for (const auto& e : a.events) {
-      EXPECT_LT(e.x, 128);
-      EXPECT_LT(e.y, 128);
-      EXPECT_GE(e.ts, previous);
-      EXPECT_GE(e.ts, ros::Time(500.0));
-      EXPECT_LE(e.ts, ros::Time(501.0));
-      previous = e.ts;
-    }
-    events += a.events.size();
-  }
+  ASSERT_NO_FATAL_FAILURE(ebslam_ros_test::checkEventArrays(
+      arrays, "edvs_optical_frame", 128, 128, ros::Time(500.0), ros::Time(501.0), &events));
   EXPECT_GT(events, 10000u);  // a hand-held rig in a textured room
 
   // Depth: 30 Hz, 16UC1 mm, stamped exposure + 12 ms on the depth camera's clock.

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include <ebslam/camera_model.h>
+#include <ebslam/closed_loop_simulator.h>
 #include <ebslam/dedvs_fusion.h>
 #include <ebslam/dedvs_scene.h>
 #include <ebslam/dedvs_simulator.h>
-#include <ebslam/closed_loop_simulator.h>
 #include <ebslam/ebpf.h>
 #include <ebslam/ebslam2d.h>
 #include <ebslam/ebslam3d.h>
