@@ -186,14 +186,11 @@ geometry_msgs::Transform transformMsg(const Eigen::Isometry3d& t) {
   return msg;
 }
 
-void writeSession(const SessionOptions& options) {
-  double clock_origin_s = 0.0;
-  const ebslam::Trajectory edvs = edvsTrajectory(options, &clock_origin_s);
-  const Eigen::Isometry3d depth_from_edvs = depthFromEdvs();
-  ebslam::Trajectory rig;
-  for (const ebslam::StampedPose& pose : edvs) {
-    rig.push_back(stampedPoseOf(pose.t_s, isometryOf(pose) * depth_from_edvs.inverse()));
-  }
+// The room of a session: walls and boxes beside the eDVS path, no table, the thesis'
+// floor-robot texture (lines and circles, 6.5.3) on the ceiling, which the 2D simulator and the
+// EB-PF/EB-SLAM-2D defaults use: about 40k events/s on these runs.
+ebslam::Scene sessionScene(const SessionOptions& options, const ebslam::Trajectory& rig,
+                           const ebslam::Trajectory& edvs) {
   ebslam::RoomSceneConfig room;
   room.seed = options.seed;
   room.ceiling_height_m = kEdvsHeightM + ebslam::kThesisCeilingHeightM;
@@ -201,8 +198,6 @@ void writeSession(const SessionOptions& options) {
   room.box_count = 0;
   ebslam::Scene scene = ebslam::makeRoomScene(rig, room);
   addBoxesBesidePath(scene, edvs, options.box_count, options.seed);
-  // The ceiling carries the thesis' floor-robot texture (lines and circles, 6.5.3), which the
-  // 2D simulator and the EB-PF/EB-SLAM-2D defaults use: about 40k events/s on these runs.
   ebslam::LinesAndCirclesConfig lines;
   lines.seed = options.seed;
   for (ebslam::TexturedPlane& plane : scene.planes) {
@@ -213,6 +208,83 @@ void writeSession(const SessionOptions& options) {
       plane.repeat = true;
     }
   }
+  return scene;
+}
+
+// The static mounting base_link -> rgb_frame, latched as tf2's static publisher sends it.
+void writeStaticMount(rosbag::Bag& bag, const ros::Time& stamp, const std::string& rgb_frame,
+                      const Eigen::Isometry3d& depth_from_edvs) {
+  tf2_msgs::TFMessage statics;
+  geometry_msgs::TransformStamped mount;
+  mount.header.stamp = stamp;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = rgb_frame;
+  mount.transform =
+      transformMsg(depth_from_edvs.inverse());  // base_link = eDVS position, x forward
+  statics.transforms.push_back(mount);
+  auto header = boost::make_shared<std::map<std::string, std::string>>();
+  (*header)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
+  (*header)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
+  (*header)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
+  (*header)["latching"] = "1";
+  (*header)["callerid"] = "/make_session";
+  bag.write("/tf_static", mount.header.stamp, statics, header);
+}
+
+// The eDVS ground truth at ground_truth_rate_hz on /ground_truth/pose and /tf (map ->
+// ground_truth, map on the floor under the start pose). Returns the pose count.
+std::size_t writeGroundTruth(rosbag::Bag& bag, const ebslam::DedvsRun& run,
+                             const SessionOptions& options, double clock_origin_s) {
+  std::size_t ground_truth_poses = 0;
+  const double step = 1.0 / options.ground_truth_rate_hz;
+  double next_t = -1.0;
+  for (const ebslam::StampedPose& pose : run.edvs_ground_truth) {
+    if (pose.t_s < next_t) continue;
+    next_t = pose.t_s + step;
+    const ros::Time stamp(clock_origin_s + pose.t_s);
+    Eigen::Isometry3d in_map = isometryOf(pose);
+    in_map.translation().z() -= kEdvsHeightM;
+    geometry_msgs::PoseStamped msg;
+    msg.header.stamp = stamp;
+    msg.header.frame_id = "map";
+    const geometry_msgs::Transform t = transformMsg(in_map);
+    msg.pose.position.x = t.translation.x;
+    msg.pose.position.y = t.translation.y;
+    msg.pose.position.z = t.translation.z;
+    msg.pose.orientation = t.rotation;
+    bag.write("/ground_truth/pose", stamp, msg);
+    tf2_msgs::TFMessage tf;
+    geometry_msgs::TransformStamped ts;
+    ts.header = msg.header;
+    ts.child_frame_id = "ground_truth";
+    ts.transform = t;
+    tf.transforms.push_back(ts);
+    bag.write("/tf", stamp, tf);
+    ++ground_truth_poses;
+  }
+  return ground_truth_poses;
+}
+
+// Copies a bag written topic by topic into `output` in time order (compressed as asked).
+void copyInTimeOrder(const std::string& unordered_path, const SessionOptions& options) {
+  rosbag::Bag unordered(unordered_path, rosbag::bagmode::Read);
+  rosbag::Bag ordered(options.output, rosbag::bagmode::Write);
+  if (options.compression == "bz2") ordered.setCompression(rosbag::compression::BZ2);
+  if (options.compression == "lz4") ordered.setCompression(rosbag::compression::LZ4);
+  for (const rosbag::MessageInstance& m : rosbag::View(unordered)) {
+    ordered.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+  }
+}
+
+void writeSession(const SessionOptions& options) {
+  double clock_origin_s = 0.0;
+  const ebslam::Trajectory edvs = edvsTrajectory(options, &clock_origin_s);
+  const Eigen::Isometry3d depth_from_edvs = depthFromEdvs();
+  ebslam::Trajectory rig;
+  for (const ebslam::StampedPose& pose : edvs) {
+    rig.push_back(stampedPoseOf(pose.t_s, isometryOf(pose) * depth_from_edvs.inverse()));
+  }
+  const ebslam::Scene scene = sessionScene(options, rig, edvs);
 
   ebslam::DedvsSimulatorConfig config;
   config.edvs = ebslam::CameraModel{};  // the thesis' floor-robot eDVS (6.5.3)
@@ -236,24 +308,7 @@ void writeSession(const SessionOptions& options) {
   const std::string rgb_frame = "camera_rgb_optical_frame";
   const std::string edvs_frame = "edvs_optical_frame";
 
-  // Static mounting, latched as tf2's static publisher sends it.
-  {
-    tf2_msgs::TFMessage statics;
-    geometry_msgs::TransformStamped mount;
-    mount.header.stamp = ros::Time(clock_origin_s + options.t_begin_s);
-    mount.header.frame_id = "base_link";
-    mount.child_frame_id = rgb_frame;
-    mount.transform =
-        transformMsg(depth_from_edvs.inverse());  // base_link = eDVS position, x forward
-    statics.transforms.push_back(mount);
-    auto header = boost::make_shared<std::map<std::string, std::string>>();
-    (*header)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
-    (*header)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
-    (*header)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
-    (*header)["latching"] = "1";
-    (*header)["callerid"] = "/make_session";
-    bag.write("/tf_static", mount.header.stamp, statics, header);
-  }
+  writeStaticMount(bag, ros::Time(clock_origin_s + options.t_begin_s), rgb_frame, depth_from_edvs);
 
   ebslam::EventVector pending;
   std::int64_t message_end_us = 0;
@@ -309,43 +364,9 @@ void writeSession(const SessionOptions& options) {
       simulator.simulate(scene, rig, options.t_begin_s, t_end, on_events, on_depth);
   flush_events();
 
-  std::size_t ground_truth_poses = 0;
-  const double step = 1.0 / options.ground_truth_rate_hz;
-  double next_t = -1.0;
-  for (const ebslam::StampedPose& pose : run.edvs_ground_truth) {
-    if (pose.t_s < next_t) continue;
-    next_t = pose.t_s + step;
-    const ros::Time stamp(clock_origin_s + pose.t_s);
-    Eigen::Isometry3d in_map = isometryOf(pose);
-    in_map.translation().z() -= kEdvsHeightM;  // map frame on the floor under the start pose
-    geometry_msgs::PoseStamped msg;
-    msg.header.stamp = stamp;
-    msg.header.frame_id = "map";
-    const geometry_msgs::Transform t = transformMsg(in_map);
-    msg.pose.position.x = t.translation.x;
-    msg.pose.position.y = t.translation.y;
-    msg.pose.position.z = t.translation.z;
-    msg.pose.orientation = t.rotation;
-    bag.write("/ground_truth/pose", stamp, msg);
-    tf2_msgs::TFMessage tf;
-    geometry_msgs::TransformStamped ts;
-    ts.header = msg.header;
-    ts.child_frame_id = "ground_truth";
-    ts.transform = t;
-    tf.transforms.push_back(ts);
-    bag.write("/tf", stamp, tf);
-    ++ground_truth_poses;
-  }
+  const std::size_t ground_truth_poses = writeGroundTruth(bag, run, options, clock_origin_s);
   bag.close();
-  {
-    rosbag::Bag unordered(unordered_path, rosbag::bagmode::Read);
-    rosbag::Bag ordered(options.output, rosbag::bagmode::Write);
-    if (options.compression == "bz2") ordered.setCompression(rosbag::compression::BZ2);
-    if (options.compression == "lz4") ordered.setCompression(rosbag::compression::LZ4);
-    for (const rosbag::MessageInstance& m : rosbag::View(unordered)) {
-      ordered.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
-    }
-  }
+  copyInTimeOrder(unordered_path, options);
   std::filesystem::remove(unordered_path);
   std::printf(
       "session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu RGB-D frames "

@@ -524,6 +524,14 @@ struct Dalic::Impl {
     c.origin = seed_index;
   }
 
+  // update(): cluster c refitted to the sums `a` of its pixels (kClusterAccSize floats, chunks
+  // summed); false if it is purged (no pixel, or lighter than min_size_fraction).
+  static bool refit(const Dalic& self, const float* a, Cluster& c);
+  // update()'s count control: drop the lightest clusters down to `target`, or split the
+  // heaviest along their principal axis up to it.
+  static void dropLightest(Dalic& self, std::vector<Cluster>& next, int target);
+  static void splitHeaviest(Dalic& self, std::vector<Cluster>& next, int target);
+
   // Projected radius of a cluster in pixels: R f / z for DASP, R_rho (def. 5) from the mean
   // density otherwise.
   static float radiusPx(const Dalic& self, float depth, float mean_density) {
@@ -721,111 +729,128 @@ void Dalic::update() {
           accumulators.data() + stride * static_cast<std::size_t>(chunk) + k * kClusterAccSize;
       for (int q = 0; q < kClusterAccSize; ++q) a[q] += src[q];
     }
-    const float* sums = a + kRunAccSize;  // detail::RunSum order
-    const float n = a[kCount];
-    if (n <= 0.0f || sums[detail::kSumDensity] < params_.min_size_fraction) continue;  // purge
     Cluster c = clusters_[k];
-    const float inv_n = 1.0f / n;
-    const float mu = a[kSu] * inv_n, mv = a[kSv] * inv_n;
-    c.u += mu;
-    c.v += mv;
-    c.color =
-        Eigen::Vector3f(sums[detail::kSumR], sums[detail::kSumG], sums[detail::kSumB]) * inv_n;
-    c.pixel_count = static_cast<int>(n);
-    c.mass = sums[detail::kSumDensity];
-    // Principal 2D axis for splitting.
-    const float cuu = a[kSuu] * inv_n - mu * mu;
-    const float cvv = a[kSvv] * inv_n - mv * mv;
-    const float cuv = a[kSuv] * inv_n - mu * mv;
-    const float half_trace = 0.5f * (cuu + cvv);
-    const float det_term = std::sqrt(std::max(0.0f, 0.25f * (cuu - cvv) * (cuu - cvv) + cuv * cuv));
-    const float major = std::max(0.0f, half_trace + det_term);
-    Eigen::Vector2f axis(major - cvv, cuv);
-    if (axis.norm() < 1e-6f) axis = Eigen::Vector2f(cuv, major - cuu);
-    if (axis.norm() < 1e-6f) axis = Eigen::Vector2f(1.0f, 0.0f);
-    axis = axis.normalized() * std::sqrt(major);
-    c.spread_u = axis.x();
-    c.spread_v = axis.y();
-    if (depth) {
-      const float* moments = sums + detail::kSumX;  // x, y, z, xx, xy, xz, yy, yz, zz
-      const Eigen::Vector3f mean(moments[0] * inv_n, moments[1] * inv_n, moments[2] * inv_n);
-      c.position += mean;
-      if (n >= 4.0f) {
-        Eigen::Matrix3f cov;
-        cov << moments[3], moments[4], moments[5], moments[4], moments[6], moments[7], moments[5],
-            moments[7], moments[8];
-        cov *= inv_n;
-        cov -= mean * mean.transpose();
-        planeNormal(cov, c.normal);
-      }  // else: too few points for a plane fit, keep the previous normal
-      if (!(c.normal.norm() > 0.0f) || !c.normal.allFinite()) c.normal = -Eigen::Vector3f::UnitZ();
-      c.normal.normalize();
-      if (c.normal.dot(c.position) > 0.0f) c.normal = -c.normal;  // towards the camera
-    }
-    c.radius_px = Impl::radiusPx(*this, c.position.z(), c.mass * inv_n);
-    next.push_back(c);
+    if (Impl::refit(*this, a, c)) next.push_back(c);
   }
 
   // Count control: split the heaviest clusters or drop the lightest until the target is met.
   const int target = params_.target_count;
   if (target > 0 && !next.empty()) {
     const int have = static_cast<int>(next.size());
-    std::vector<std::pair<float, int>>& by_mass = scratch_->by_mass;
-    by_mass.resize(static_cast<std::size_t>(have));
     if (have > target) {
-      // The lightest first, ties in index order.
-      for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, i};
-      std::sort(by_mass.begin(), by_mass.end());
-      std::vector<std::uint8_t>& drop = scratch_->drop;
-      drop.assign(next.size(), 0);
-      for (int i = 0; i < have - target; ++i) drop[by_mass[static_cast<std::size_t>(i)].second] = 1;
-      std::size_t kept = 0;  // compacted in place, order kept
-      for (std::size_t i = 0; i < next.size(); ++i) {
-        if (!drop[i]) next[kept++] = next[i];
-      }
-      next.resize(kept);
+      Impl::dropLightest(*this, next, target);
     } else if (have < target) {
-      // Max-heap on mass; ties broken by index for determinism.
-      for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, -i};
-      std::make_heap(by_mass.begin(), by_mass.end());  // O(K)
-      for (int added = 0; added < target - have; ++added) {
-        const int index = -by_mass.front().second;
-        std::pop_heap(by_mass.begin(), by_mass.end());
-        by_mass.pop_back();
-        Cluster& parent = next[static_cast<std::size_t>(index)];
-        Cluster child = parent;
-        child.origin = -1;  // a new superpixel: only the parent continues the seed
-        // Centroids of the two halves of a disc lie 0.85 standard deviations from its centre.
-        const float su = 0.85f * parent.spread_u, sv = 0.85f * parent.spread_v;
-        parent.u -= su;
-        parent.v -= sv;
-        child.u += su;
-        child.v += sv;
-        parent.mass *= 0.5f;
-        child.mass *= 0.5f;
-        parent.spread_u *= 0.5f;
-        parent.spread_v *= 0.5f;
-        child.spread_u *= 0.5f;
-        child.spread_v *= 0.5f;
-        for (Cluster* half : {&parent, &child}) {
-          half->u = std::clamp(half->u, 0.0f, static_cast<float>(f.width - 1));
-          half->v = std::clamp(half->v, 0.0f, static_cast<float>(f.height - 1));
-          if (depth) {
-            const std::size_t i = static_cast<std::size_t>(std::lround(half->v)) * f.width +
-                                  static_cast<std::size_t>(std::lround(half->u));
-            if (f.valid[i]) half->position = Eigen::Vector3f(f.x[i], f.y[i], f.z[i]);
-          }
-        }
-        const float parent_mass = parent.mass;
-        next.push_back(child);  // capacity reserved above: no reallocation
-        by_mass.push_back({parent_mass, -index});
-        std::push_heap(by_mass.begin(), by_mass.end());
-        by_mass.push_back({child.mass, -static_cast<int>(next.size() - 1)});
-        std::push_heap(by_mass.begin(), by_mass.end());
-      }
+      Impl::splitHeaviest(*this, next, target);
     }
   }
   clusters_.swap(next);
+}
+
+bool Dalic::Impl::refit(const Dalic& self, const float* a, Cluster& c) {
+  const float* sums = a + kRunAccSize;  // detail::RunSum order
+  const float n = a[kCount];
+  if (n <= 0.0f || sums[detail::kSumDensity] < self.params_.min_size_fraction) return false;
+  const float inv_n = 1.0f / n;
+  const float mu = a[kSu] * inv_n, mv = a[kSv] * inv_n;
+  c.u += mu;
+  c.v += mv;
+  c.color = Eigen::Vector3f(sums[detail::kSumR], sums[detail::kSumG], sums[detail::kSumB]) * inv_n;
+  c.pixel_count = static_cast<int>(n);
+  c.mass = sums[detail::kSumDensity];
+  // Principal 2D axis for splitting.
+  const float cuu = a[kSuu] * inv_n - mu * mu;
+  const float cvv = a[kSvv] * inv_n - mv * mv;
+  const float cuv = a[kSuv] * inv_n - mu * mv;
+  const float half_trace = 0.5f * (cuu + cvv);
+  const float det_term = std::sqrt(std::max(0.0f, 0.25f * (cuu - cvv) * (cuu - cvv) + cuv * cuv));
+  const float major = std::max(0.0f, half_trace + det_term);
+  Eigen::Vector2f axis(major - cvv, cuv);
+  if (axis.norm() < 1e-6f) axis = Eigen::Vector2f(cuv, major - cuu);
+  if (axis.norm() < 1e-6f) axis = Eigen::Vector2f(1.0f, 0.0f);
+  axis = axis.normalized() * std::sqrt(major);
+  c.spread_u = axis.x();
+  c.spread_v = axis.y();
+  if (self.features_.hasDepth()) {
+    const float* moments = sums + detail::kSumX;  // x, y, z, xx, xy, xz, yy, yz, zz
+    const Eigen::Vector3f mean(moments[0] * inv_n, moments[1] * inv_n, moments[2] * inv_n);
+    c.position += mean;
+    if (n >= 4.0f) {
+      Eigen::Matrix3f cov;
+      cov << moments[3], moments[4], moments[5], moments[4], moments[6], moments[7], moments[5],
+          moments[7], moments[8];
+      cov *= inv_n;
+      cov -= mean * mean.transpose();
+      planeNormal(cov, c.normal);
+    }  // else: too few points for a plane fit, keep the previous normal
+    if (!(c.normal.norm() > 0.0f) || !c.normal.allFinite()) c.normal = -Eigen::Vector3f::UnitZ();
+    c.normal.normalize();
+    if (c.normal.dot(c.position) > 0.0f) c.normal = -c.normal;  // towards the camera
+  }
+  c.radius_px = radiusPx(self, c.position.z(), c.mass * inv_n);
+  return true;
+}
+
+void Dalic::Impl::dropLightest(Dalic& self, std::vector<Cluster>& next, int target) {
+  const int have = static_cast<int>(next.size());
+  std::vector<std::pair<float, int>>& by_mass = self.scratch_->by_mass;
+  by_mass.resize(static_cast<std::size_t>(have));
+  // The lightest first, ties in index order.
+  for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, i};
+  std::sort(by_mass.begin(), by_mass.end());
+  std::vector<std::uint8_t>& drop = self.scratch_->drop;
+  drop.assign(next.size(), 0);
+  for (int i = 0; i < have - target; ++i) drop[by_mass[static_cast<std::size_t>(i)].second] = 1;
+  std::size_t kept = 0;  // compacted in place, order kept
+  for (std::size_t i = 0; i < next.size(); ++i) {
+    if (!drop[i]) next[kept++] = next[i];
+  }
+  next.resize(kept);
+}
+
+void Dalic::Impl::splitHeaviest(Dalic& self, std::vector<Cluster>& next, int target) {
+  const PixelFeatures& f = self.features_;
+  const bool depth = f.hasDepth();
+  const int have = static_cast<int>(next.size());
+  std::vector<std::pair<float, int>>& by_mass = self.scratch_->by_mass;
+  by_mass.resize(static_cast<std::size_t>(have));
+  // Max-heap on mass; ties broken by index for determinism.
+  for (int i = 0; i < have; ++i) by_mass[static_cast<std::size_t>(i)] = {next[i].mass, -i};
+  std::make_heap(by_mass.begin(), by_mass.end());  // O(K)
+  for (int added = 0; added < target - have; ++added) {
+    const int index = -by_mass.front().second;
+    std::pop_heap(by_mass.begin(), by_mass.end());
+    by_mass.pop_back();
+    Cluster& parent = next[static_cast<std::size_t>(index)];
+    Cluster child = parent;
+    child.origin = -1;  // a new superpixel: only the parent continues the seed
+    // Centroids of the two halves of a disc lie 0.85 standard deviations from its centre.
+    const float su = 0.85f * parent.spread_u, sv = 0.85f * parent.spread_v;
+    parent.u -= su;
+    parent.v -= sv;
+    child.u += su;
+    child.v += sv;
+    parent.mass *= 0.5f;
+    child.mass *= 0.5f;
+    parent.spread_u *= 0.5f;
+    parent.spread_v *= 0.5f;
+    child.spread_u *= 0.5f;
+    child.spread_v *= 0.5f;
+    for (Cluster* half : {&parent, &child}) {
+      half->u = std::clamp(half->u, 0.0f, static_cast<float>(f.width - 1));
+      half->v = std::clamp(half->v, 0.0f, static_cast<float>(f.height - 1));
+      if (depth) {
+        const std::size_t i = static_cast<std::size_t>(std::lround(half->v)) * f.width +
+                              static_cast<std::size_t>(std::lround(half->u));
+        if (f.valid[i]) half->position = Eigen::Vector3f(f.x[i], f.y[i], f.z[i]);
+      }
+    }
+    const float parent_mass = parent.mass;
+    next.push_back(child);  // capacity reserved by update(): no reallocation
+    by_mass.push_back({parent_mass, -index});
+    std::push_heap(by_mass.begin(), by_mass.end());
+    by_mass.push_back({child.mass, -static_cast<int>(next.size() - 1)});
+    std::push_heap(by_mass.begin(), by_mass.end());
+  }
 }
 
 }  // namespace dasp

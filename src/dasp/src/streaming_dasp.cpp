@@ -17,6 +17,120 @@ std::uint64_t mixSeed(std::uint64_t seed, std::uint64_t frame) {
   return z ^ (z >> 31);
 }
 
+// Seeds of a frame and, per seed, the index of the previous centre it continues (-1 = new): a
+// fresh sample on the first frame, Delta Density Sampling from the previous centres after it.
+struct FrameSeeds {
+  std::vector<Seed> seeds;
+  std::vector<int> origin;
+};
+
+FrameSeeds sampleFrameSeeds(const cv::Mat& density, const std::vector<Seed>& previous_centres,
+                            const StreamingDaspConfig& config, std::uint64_t frame_seed,
+                            StreamingDaspFrame& out) {
+  FrameSeeds s;
+  if (previous_centres.empty()) {
+    s.seeds = sampleSeeds(density, config.dasp.seeding, frame_seed);
+    s.origin.assign(s.seeds.size(), -1);
+    out.seeds_added = static_cast<int>(s.seeds.size());
+  } else {
+    DeltaDensityResult dds =
+        deltaDensitySampling(density, previous_centres, config.delta, frame_seed);
+    s.seeds = std::move(dds.points);
+    s.origin = std::move(dds.origin);
+    out.seeds_added = dds.added;
+    out.seeds_removed = dds.removed_by_density + dds.removed_invalid;
+    out.seeds_kept = static_cast<int>(s.seeds.size()) - dds.added;
+  }
+  if (s.seeds.empty()) {  // as computeDasp: one superpixel at the density maximum
+    cv::Point max_location;
+    cv::minMaxLoc(density, nullptr, nullptr, nullptr, &max_location);
+    s.seeds.push_back({static_cast<float>(max_location.x), static_cast<float>(max_location.y)});
+    s.origin.push_back(-1);
+  }
+  return s;
+}
+
+// The final labels from DALIC's: connectivity enforced, or only empty labels dropped (dense
+// indices), as computeDasp does. Returns the label count.
+int finalizeLabels(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& density,
+                   const DaspConfig& dc, std::size_t cluster_count) {
+  if (dc.enforce_connectivity) {
+    return enforceConnectivity(labels, valid, density, dc.min_size_fraction);
+  }
+  int label_count = 0;
+  std::vector<int> renumber(cluster_count, -1);
+  for (int row = 0; row < labels.rows; ++row) {
+    int* l = labels.ptr<int>(row);
+    for (int col = 0; col < labels.cols; ++col) {
+      if (l[col] < 0) continue;
+      int& mapped = renumber[static_cast<std::size_t>(l[col])];
+      if (mapped < 0) mapped = label_count++;
+      l[col] = mapped;
+    }
+  }
+  return label_count;
+}
+
+// Which cluster each final label came from: the cluster holding most of its pixels
+// (connectivity enforcement keeps every cluster's largest piece under a new number). When two
+// labels claim one cluster (a detached piece heavy enough to stay), the larger one continues it.
+struct LabelOrigins {
+  std::vector<int> label_cluster;  // per final label: its cluster, or -1
+  std::vector<int> cluster_owner;  // per cluster: the final label that continues it, or -1
+};
+
+LabelOrigins labelOrigins(const cv::Mat& labels, const cv::Mat& raw_labels, int label_count,
+                          std::size_t cluster_count) {
+  std::vector<std::vector<std::pair<int, int>>> votes(static_cast<std::size_t>(label_count));
+  // (label * 2^31 + cluster, pixel count) per horizontal run of equal pairs, then summed.
+  std::vector<std::pair<long long, int>> runs;
+  for (int row = 0; row < labels.rows; ++row) {
+    const int* l = labels.ptr<int>(row);
+    const int* r = raw_labels.ptr<int>(row);
+    for (int col = 0; col < labels.cols; ++col) {
+      if (l[col] < 0 || r[col] < 0) continue;
+      const long long key = static_cast<long long>(l[col]) * (1LL << 31) + r[col];
+      if (col > 0 && !runs.empty() && runs.back().first == key && l[col - 1] == l[col] &&
+          r[col - 1] == r[col]) {
+        ++runs.back().second;
+      } else {
+        runs.push_back({key, 1});
+      }
+    }
+  }
+  std::sort(runs.begin(), runs.end());
+  for (std::size_t i = 0; i < runs.size();) {
+    std::size_t j = i;
+    int count = 0;
+    while (j < runs.size() && runs[j].first == runs[i].first) count += runs[j++].second;
+    const int label = static_cast<int>(runs[i].first >> 31);
+    const int cluster = static_cast<int>(runs[i].first & ((1LL << 31) - 1));
+    votes[static_cast<std::size_t>(label)].push_back({count, cluster});
+    i = j;
+  }
+  LabelOrigins o;
+  o.label_cluster.assign(static_cast<std::size_t>(label_count), -1);
+  std::vector<int> label_size(static_cast<std::size_t>(label_count), 0);
+  for (int l = 0; l < label_count; ++l) {
+    const auto& v = votes[static_cast<std::size_t>(l)];
+    if (v.empty()) continue;
+    const auto best = std::max_element(v.begin(), v.end());
+    o.label_cluster[static_cast<std::size_t>(l)] = best->second;
+    label_size[static_cast<std::size_t>(l)] = best->first;
+  }
+  o.cluster_owner.assign(cluster_count, -1);
+  for (int l = 0; l < label_count; ++l) {
+    const int c = o.label_cluster[static_cast<std::size_t>(l)];
+    if (c < 0) continue;
+    int& owner = o.cluster_owner[static_cast<std::size_t>(c)];
+    if (owner < 0 ||
+        label_size[static_cast<std::size_t>(l)] > label_size[static_cast<std::size_t>(owner)]) {
+      owner = l;
+    }
+  }
+  return o;
+}
+
 }  // namespace
 
 StreamingDasp::StreamingDasp(const StreamingDaspConfig& config) : config_(config) {
@@ -40,34 +154,13 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
 
   StreamingDaspFrame out;
   out.frame_index = frame_index_;
-  // Seeds and, per seed, the index of the previous centre it continues (-1 = new).
-  std::vector<Seed> seeds;
-  std::vector<int> seed_origin;
-  if (previous_centres_.empty()) {
-    seeds = sampleSeeds(density, dc.seeding, frame_seed);
-    seed_origin.assign(seeds.size(), -1);
-    out.seeds_added = static_cast<int>(seeds.size());
-  } else {
-    DeltaDensityResult dds =
-        deltaDensitySampling(density, previous_centres_, config_.delta, frame_seed);
-    seeds = std::move(dds.points);
-    seed_origin = std::move(dds.origin);
-    out.seeds_added = dds.added;
-    out.seeds_removed = dds.removed_by_density + dds.removed_invalid;
-    out.seeds_kept = static_cast<int>(seeds.size()) - dds.added;
-  }
-  if (seeds.empty()) {  // as computeDasp: one superpixel at the density maximum
-    cv::Point max_location;
-    cv::minMaxLoc(density, nullptr, nullptr, nullptr, &max_location);
-    seeds.push_back({static_cast<float>(max_location.x), static_cast<float>(max_location.y)});
-    seed_origin.push_back(-1);
-  }
+  const FrameSeeds seeds = sampleFrameSeeds(density, previous_centres_, config_, frame_seed, out);
 
   const DalicParams params =
       dalicParams(dc, MetricKind::kDepthAdaptive, radius,
                   dc.size_mode == SizeMode::kCount ? dc.superpixel_count : 0);
   Dalic dalic(features, density, params);
-  dalic.initialize(seeds);
+  dalic.initialize(seeds.seeds);
   for (int it = 0; it < dc.iterations; ++it) {
     dalic.assign();
     if (it + 1 < dc.iterations) dalic.update();
@@ -77,73 +170,8 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   cv::Mat labels = raw_labels.clone();
   const cv::Mat valid(features.height, features.width, CV_8UC1,
                       const_cast<std::uint8_t*>(features.valid.data()));
-  int label_count = 0;
-  if (dc.enforce_connectivity) {
-    label_count = enforceConnectivity(labels, valid, density, dc.min_size_fraction);
-  } else {
-    // Drop empty labels only (dense indices), as computeDasp does.
-    std::vector<int> renumber(clusters.size(), -1);
-    for (int row = 0; row < labels.rows; ++row) {
-      int* l = labels.ptr<int>(row);
-      for (int col = 0; col < labels.cols; ++col) {
-        if (l[col] < 0) continue;
-        int& mapped = renumber[static_cast<std::size_t>(l[col])];
-        if (mapped < 0) mapped = label_count++;
-        l[col] = mapped;
-      }
-    }
-  }
-  // Which cluster each final label came from: the cluster holding most of its pixels
-  // (connectivity enforcement keeps every cluster's largest piece under a new number). When two
-  // labels claim one cluster (a detached piece heavy enough to stay), the larger one continues it.
-  std::vector<std::vector<std::pair<int, int>>> votes(static_cast<std::size_t>(label_count));
-  {
-    // (label * 2^31 + cluster, pixel count) per horizontal run of equal pairs, then summed.
-    std::vector<std::pair<long long, int>> runs;
-    for (int row = 0; row < labels.rows; ++row) {
-      const int* l = labels.ptr<int>(row);
-      const int* r = raw_labels.ptr<int>(row);
-      for (int col = 0; col < labels.cols; ++col) {
-        if (l[col] < 0 || r[col] < 0) continue;
-        const long long key = static_cast<long long>(l[col]) * (1LL << 31) + r[col];
-        if (col > 0 && !runs.empty() && runs.back().first == key && l[col - 1] == l[col] &&
-            r[col - 1] == r[col]) {
-          ++runs.back().second;
-        } else {
-          runs.push_back({key, 1});
-        }
-      }
-    }
-    std::sort(runs.begin(), runs.end());
-    for (std::size_t i = 0; i < runs.size();) {
-      std::size_t j = i;
-      int count = 0;
-      while (j < runs.size() && runs[j].first == runs[i].first) count += runs[j++].second;
-      const int label = static_cast<int>(runs[i].first >> 31);
-      const int cluster = static_cast<int>(runs[i].first & ((1LL << 31) - 1));
-      votes[static_cast<std::size_t>(label)].push_back({count, cluster});
-      i = j;
-    }
-  }
-  std::vector<int> label_cluster(static_cast<std::size_t>(label_count), -1);
-  std::vector<int> label_size(static_cast<std::size_t>(label_count), 0);
-  for (int l = 0; l < label_count; ++l) {
-    const auto& v = votes[static_cast<std::size_t>(l)];
-    if (v.empty()) continue;
-    const auto best = std::max_element(v.begin(), v.end());
-    label_cluster[static_cast<std::size_t>(l)] = best->second;
-    label_size[static_cast<std::size_t>(l)] = best->first;
-  }
-  std::vector<int> cluster_owner(clusters.size(), -1);
-  for (int l = 0; l < label_count; ++l) {
-    const int c = label_cluster[static_cast<std::size_t>(l)];
-    if (c < 0) continue;
-    int& owner = cluster_owner[static_cast<std::size_t>(c)];
-    if (owner < 0 ||
-        label_size[static_cast<std::size_t>(l)] > label_size[static_cast<std::size_t>(owner)]) {
-      owner = l;
-    }
-  }
+  const int label_count = finalizeLabels(labels, valid, density, dc, clusters.size());
+  const LabelOrigins origins = labelOrigins(labels, raw_labels, label_count, clusters.size());
 
   out.superpixels.labels = labels;
   out.superpixels.superpixels =
@@ -152,10 +180,10 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   out.predecessor.assign(n, -1);
   out.track_id.assign(n, -1);
   for (std::size_t j = 0; j < n; ++j) {
-    const int c = j < label_cluster.size() ? label_cluster[j] : -1;
-    if (c >= 0 && cluster_owner[static_cast<std::size_t>(c)] == static_cast<int>(j)) {
+    const int c = j < origins.label_cluster.size() ? origins.label_cluster[j] : -1;
+    if (c >= 0 && origins.cluster_owner[static_cast<std::size_t>(c)] == static_cast<int>(j)) {
       const int seed_index = clusters[static_cast<std::size_t>(c)].origin;
-      if (seed_index >= 0) out.predecessor[j] = seed_origin[static_cast<std::size_t>(seed_index)];
+      if (seed_index >= 0) out.predecessor[j] = seeds.origin[static_cast<std::size_t>(seed_index)];
     }
     const int p = out.predecessor[j];
     out.track_id[j] = p >= 0 ? previous_track_ids_[static_cast<std::size_t>(p)] : next_track_id_++;

@@ -180,19 +180,8 @@ struct Run {
   int row, begin, end, label;
 };
 
-// Working memory of enforceConnectivity, O(runs) (a frame has some 20 000 runs). A thread_local
-// copy measured no faster on a stream of frames, so it is allocated per call.
-struct ConnectivityScratch {
-  std::vector<Run> runs;
-  std::vector<float> run_weight;
-  std::vector<int> row_first, parent, component_of_run, component_of_root;
-  std::vector<std::uint8_t> flags;
-};
-
-}  // namespace
-
-int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
-                        double min_weight, const cv::Mat& depth, float depth_jump_ratio) {
+void checkConnectivityInputs(const cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
+                             const cv::Mat& depth, float depth_jump_ratio) {
   if (labels.type() != CV_32SC1 || !labels.isContinuous()) {
     throw std::invalid_argument("enforceConnectivity: labels must be a continuous CV_32SC1");
   }
@@ -214,239 +203,314 @@ int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& we
   if (!depth.empty() && !(depth_jump_ratio > 0.0f)) {
     throw std::invalid_argument("enforceConnectivity: depth_jump_ratio must be positive");
   }
-  const int width = labels.cols;
-  const int height = labels.rows;
-  int* label = labels.ptr<int>();
-  const float* z = depth.empty() ? nullptr : depth.ptr<float>();
-  const auto connected = [z, depth_jump_ratio](std::size_t a, std::size_t b) {
-    return depthConnected(z[a], z[b], depth_jump_ratio);
-  };
-  const std::uint8_t* ok = valid.empty() ? nullptr : valid.ptr<std::uint8_t>();
-  const float* pixel_weight = weight.empty() ? nullptr : weight.ptr<float>();
+}
 
-  ConnectivityScratch w;
+// enforceConnectivity in its steps: horizontal runs of equal label, runs linked into 4-connected
+// components, the largest piece of each label keeps it, stray pieces join a neighbour, labels
+// renumbered. Working memory O(runs) (a frame has some 20 000 runs); a thread_local copy
+// measured no faster on a stream of frames, so it is allocated per call.
+class ConnectivityPass {
+ public:
+  ConnectivityPass(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight, double min_weight,
+                   const cv::Mat& depth, float depth_jump_ratio)
+      : width_(labels.cols),
+        height_(labels.rows),
+        label_(labels.ptr<int>()),
+        ok_(valid.empty() ? nullptr : valid.ptr<std::uint8_t>()),
+        pixel_weight_(weight.empty() ? nullptr : weight.ptr<float>()),
+        z_(depth.empty() ? nullptr : depth.ptr<float>()),
+        depth_jump_ratio_(depth_jump_ratio),
+        min_weight_(min_weight) {}
+
+  int run() {
+    findRuns();
+    linkRuns();
+    buildComponents();
+    keepLargestPieces();
+    groupStrayRuns();
+    resolveStrayPieces();
+    labelIslands();
+    return writeLabels();
+  }
+
+ private:
+  static constexpr int kUnresolved = -2;
+
+  bool connected(std::size_t a, std::size_t b) const {
+    return depthConnected(z_[a], z_[b], depth_jump_ratio_);
+  }
 
   // Horizontal runs of equal label over usable pixels; unlabelled usable pixels (-1) form runs
   // too, which are then merged like stray pieces. The run flags of a row come from one
   // vectorised pass; the runs are read off them eight flags at a time.
-  std::vector<Run>& runs = w.runs;
-  std::vector<float>& run_weight = w.run_weight;
-  std::vector<int>& row_first = w.row_first;
-  runs.reserve(static_cast<std::size_t>(height) * 48);
-  if (pixel_weight != nullptr) run_weight.reserve(runs.capacity());
-  row_first.assign(static_cast<std::size_t>(height) + 1, 0);
-  w.flags.resize(static_cast<std::size_t>(width) + 8);
-  std::uint8_t* flags = w.flags.data();
-  for (int row = 0; row < height; ++row) {
-    row_first[static_cast<std::size_t>(row)] = static_cast<int>(runs.size());
-    const std::size_t base = static_cast<std::size_t>(row) * width;
-    if (width == 0) continue;
-    rowFlagsAny(label + base, ok == nullptr ? nullptr : ok + base,
-                z == nullptr ? nullptr : z + base, depth_jump_ratio, width, flags);
-    int col = 0;
-    while (col < width) {
-      if ((flags[col] & 2) != 0) {
-        col = nextUsable(flags, col + 1, width);
-        continue;
-      }
-      const int end = nextNonZero(flags, col + 1);
-      runs.push_back({row, col, end, label[base + col]});
-      if (pixel_weight != nullptr) run_weight.push_back(runSum(pixel_weight + base, col, end));
-      col = end;
-    }
-  }
-  row_first[static_cast<std::size_t>(height)] = static_cast<int>(runs.size());
-  const int run_count = static_cast<int>(runs.size());
-
-  // Connect runs of equal label that overlap in consecutive rows (4-neighbourhood).
-  std::vector<int>& parent = w.parent;
-  parent.resize(static_cast<std::size_t>(run_count));
-  for (int r = 0; r < run_count; ++r) parent[r] = r;
-  for (int row = 1; row < height; ++row) {
-    int q = row_first[row - 1];
-    const int q_end = row_first[row];
-    for (int r = row_first[row]; r < row_first[row + 1]; ++r) {
-      while (q < q_end && runs[q].end <= runs[r].begin) ++q;
-      for (int p = q; p < q_end && runs[p].begin < runs[r].end; ++p) {
-        if (runs[p].label != runs[r].label) continue;
-        if (z != nullptr) {
-          const std::size_t base = static_cast<std::size_t>(row) * width;
-          bool touching = false;
-          const int overlap_end = std::min(runs[p].end, runs[r].end);
-          for (int x = std::max(runs[p].begin, runs[r].begin); x < overlap_end && !touching; ++x) {
-            touching = connected(base + x - width, base + x);
-          }
-          if (!touching) continue;
+  void findRuns() {
+    runs_.reserve(static_cast<std::size_t>(height_) * 48);
+    if (pixel_weight_ != nullptr) run_weight_.reserve(runs_.capacity());
+    row_first_.assign(static_cast<std::size_t>(height_) + 1, 0);
+    std::vector<std::uint8_t> flag_row(static_cast<std::size_t>(width_) + 8);
+    std::uint8_t* flags = flag_row.data();
+    for (int row = 0; row < height_; ++row) {
+      row_first_[static_cast<std::size_t>(row)] = static_cast<int>(runs_.size());
+      const std::size_t base = static_cast<std::size_t>(row) * width_;
+      if (width_ == 0) continue;
+      rowFlagsAny(label_ + base, ok_ == nullptr ? nullptr : ok_ + base,
+                  z_ == nullptr ? nullptr : z_ + base, depth_jump_ratio_, width_, flags);
+      int col = 0;
+      while (col < width_) {
+        if ((flags[col] & 2) != 0) {
+          col = nextUsable(flags, col + 1, width_);
+          continue;
         }
-        const int a = findRoot(parent, p), b = findRoot(parent, r);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        const int end = nextNonZero(flags, col + 1);
+        runs_.push_back({row, col, end, label_[base + col]});
+        if (pixel_weight_ != nullptr) {
+          run_weight_.push_back(runSum(pixel_weight_ + base, col, end));
+        }
+        col = end;
+      }
+    }
+    row_first_[static_cast<std::size_t>(height_)] = static_cast<int>(runs_.size());
+    run_count_ = static_cast<int>(runs_.size());
+  }
+
+  // Connects runs of equal label that overlap in consecutive rows (4-neighbourhood).
+  void linkRuns() {
+    std::vector<int>& parent = parent_;
+    const std::vector<Run>& runs = runs_;
+    parent.resize(static_cast<std::size_t>(run_count_));
+    for (int r = 0; r < run_count_; ++r) parent[r] = r;
+    for (int row = 1; row < height_; ++row) {
+      int q = row_first_[row - 1];
+      const int q_end = row_first_[row];
+      for (int r = row_first_[row]; r < row_first_[row + 1]; ++r) {
+        while (q < q_end && runs[q].end <= runs[r].begin) ++q;
+        for (int p = q; p < q_end && runs[p].begin < runs[r].end; ++p) {
+          if (runs[p].label != runs[r].label) continue;
+          if (z_ != nullptr) {
+            const std::size_t base = static_cast<std::size_t>(row) * width_;
+            bool touching = false;
+            const int overlap_end = std::min(runs[p].end, runs[r].end);
+            for (int x = std::max(runs[p].begin, runs[r].begin); x < overlap_end && !touching;
+                 ++x) {
+              touching = connected(base + x - width_, base + x);
+            }
+            if (!touching) continue;
+          }
+          const int a = findRoot(parent, p), b = findRoot(parent, r);
+          if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        }
       }
     }
   }
-  // Components, their pixel weight and their runs (bucketed by component).
-  std::vector<int>& component_of_run = w.component_of_run;
-  std::vector<int>& component_of_root = w.component_of_root;
-  component_of_run.resize(static_cast<std::size_t>(run_count));
-  component_of_root.assign(static_cast<std::size_t>(run_count), -1);
-  std::vector<int> component_label;
-  std::vector<double> component_weight;
-  std::vector<int> component_size;
-  for (int r = 0; r < run_count; ++r) {
-    // Roots are the smallest run of their component, so parent[r] < r is already final.
-    const int root = parent[r] == r ? r : parent[r] = parent[parent[r]];
-    int& c = component_of_root[root];
-    if (c < 0) {
-      c = static_cast<int>(component_label.size());
-      component_label.push_back(runs[r].label);
-      component_weight.push_back(0.0);
-      component_size.push_back(0);
-    }
-    component_of_run[r] = c;
-    const Run& run = runs[r];
-    component_size[c] += run.end - run.begin;
-    if (pixel_weight == nullptr) {
-      component_weight[c] += run.end - run.begin;
-    } else {
-      component_weight[c] += run_weight[r];
-    }
-  }
-  const int component_count = static_cast<int>(component_label.size());
 
-  // The largest piece of each label keeps it.
-  int max_label = -1;
-  for (int value : component_label) max_label = std::max(max_label, value);
-  std::vector<int> largest(static_cast<std::size_t>(max_label + 1), -1);
-  for (int c = 0; c < component_count; ++c) {
-    const int value = component_label[c];
-    if (value < 0) continue;
-    int& best = largest[static_cast<std::size_t>(value)];
-    if (best < 0 || component_size[c] > component_size[best]) best = c;
+  // Components, their pixel weight and size.
+  void buildComponents() {
+    std::vector<int>& parent = parent_;
+    component_of_run_.resize(static_cast<std::size_t>(run_count_));
+    std::vector<int> component_of_root(static_cast<std::size_t>(run_count_), -1);
+    for (int r = 0; r < run_count_; ++r) {
+      // Roots are the smallest run of their component, so parent[r] < r is already final.
+      const int root = parent[r] == r ? r : parent[r] = parent[parent[r]];
+      int& c = component_of_root[root];
+      if (c < 0) {
+        c = static_cast<int>(component_label_.size());
+        component_label_.push_back(runs_[r].label);
+        component_weight_.push_back(0.0);
+        component_size_.push_back(0);
+      }
+      component_of_run_[r] = c;
+      const Run& run = runs_[r];
+      component_size_[c] += run.end - run.begin;
+      if (pixel_weight_ == nullptr) {
+        component_weight_[c] += run.end - run.begin;
+      } else {
+        component_weight_[c] += run_weight_[r];
+      }
+    }
+    component_count_ = static_cast<int>(component_label_.size());
   }
-  constexpr int kUnresolved = -2;
-  std::vector<int> final_label(static_cast<std::size_t>(component_count), kUnresolved);
-  for (int value = 0; value <= max_label; ++value) {
-    const int c = largest[static_cast<std::size_t>(value)];
-    if (c >= 0 && component_weight[c] >= min_weight) final_label[c] = value;
+
+  // The largest piece of each label keeps it if heavy enough; every other piece is unresolved.
+  void keepLargestPieces() {
+    int max_label = -1;
+    for (int value : component_label_) max_label = std::max(max_label, value);
+    std::vector<int> largest(static_cast<std::size_t>(max_label + 1), -1);
+    for (int c = 0; c < component_count_; ++c) {
+      const int value = component_label_[c];
+      if (value < 0) continue;
+      int& best = largest[static_cast<std::size_t>(value)];
+      if (best < 0 || component_size_[c] > component_size_[best]) best = c;
+    }
+    final_label_.assign(static_cast<std::size_t>(component_count_), kUnresolved);
+    for (int value = 0; value <= max_label; ++value) {
+      const int c = largest[static_cast<std::size_t>(value)];
+      if (c >= 0 && component_weight_[c] >= min_weight_) final_label_[c] = value;
+    }
+    next_new_label_ = max_label + 1;
   }
-  int next_new_label = max_label + 1;
 
   // Runs of the unresolved components, grouped by component.
-  std::vector<int> stray_start(static_cast<std::size_t>(component_count) + 1, 0);
-  for (int r = 0; r < run_count; ++r) {
-    if (final_label[component_of_run[r]] == kUnresolved) ++stray_start[component_of_run[r] + 1];
-  }
-  for (int c = 0; c < component_count; ++c) stray_start[c + 1] += stray_start[c];
-  std::vector<int> stray_runs(static_cast<std::size_t>(stray_start[component_count]));
-  {
-    std::vector<int> fill(stray_start.begin(), stray_start.end() - 1);
-    for (int r = 0; r < run_count; ++r) {
-      const int c = component_of_run[r];
-      if (final_label[c] == kUnresolved) stray_runs[fill[c]++] = r;
+  void groupStrayRuns() {
+    stray_start_.assign(static_cast<std::size_t>(component_count_) + 1, 0);
+    for (int r = 0; r < run_count_; ++r) {
+      if (final_label_[component_of_run_[r]] == kUnresolved)
+        ++stray_start_[component_of_run_[r] + 1];
+    }
+    for (int c = 0; c < component_count_; ++c) stray_start_[c + 1] += stray_start_[c];
+    stray_runs_.resize(static_cast<std::size_t>(stray_start_[component_count_]));
+    std::vector<int> fill(stray_start_.begin(), stray_start_.end() - 1);
+    for (int r = 0; r < run_count_; ++r) {
+      const int c = component_of_run_[r];
+      if (final_label_[c] == kUnresolved) stray_runs_[fill[c]++] = r;
     }
   }
 
-  // Stray pieces join the resolved neighbour with the longest shared border; repeat while
-  // pieces that only touch other stray pieces get resolved through them. The neighbours of a
-  // run are found among the runs of its own and the adjacent rows (pixels in no run are
-  // unusable and count for nothing).
-  std::vector<std::pair<int, int>> border;  // (label, border length)
-  // Borders across a depth jump count only for pieces that have no other way to a label.
-  bool across_jumps = z == nullptr;
   // Adds `length` border pixels of piece c with run `other_run`.
-  const auto tally = [&](int c, int other_run, int length) {
-    const int other = component_of_run[other_run];
+  void tally(int c, int other_run, int length) {
+    const int other = component_of_run_[other_run];
     if (other == c) return;
-    const int value = final_label[other];
+    const int value = final_label_[other];
     if (value < 0) return;
-    auto it = std::find_if(border.begin(), border.end(),
+    auto it = std::find_if(border_.begin(), border_.end(),
                            [value](const auto& entry) { return entry.first == value; });
-    if (it == border.end()) {
-      border.push_back({value, length});
+    if (it == border_.end()) {
+      border_.push_back({value, length});
     } else {
       it->second += length;
     }
-  };
-  // The border of run r (piece c) with the runs of row `other_row` above or below.
-  const auto tally_row = [&](int c, const Run& run, int other_row) {
-    const int first = row_first[other_row], last = row_first[other_row + 1];
+  }
+
+  // The border of run `run` (piece c) with the runs of row `other_row` above or below.
+  void tallyRow(int c, const Run& run, int other_row) {
+    const int first = row_first_[other_row], last = row_first_[other_row + 1];
     int p =
-        static_cast<int>(std::partition_point(runs.begin() + first, runs.begin() + last,
+        static_cast<int>(std::partition_point(runs_.begin() + first, runs_.begin() + last,
                                               [&run](const Run& o) { return o.end <= run.begin; }) -
-                         runs.begin());
-    for (; p < last && runs[p].begin < run.end; ++p) {
-      const int begin = std::max(runs[p].begin, run.begin);
-      const int end = std::min(runs[p].end, run.end);
+                         runs_.begin());
+    for (; p < last && runs_[p].begin < run.end; ++p) {
+      const int begin = std::max(runs_[p].begin, run.begin);
+      const int end = std::min(runs_[p].end, run.end);
       int length = end - begin;
-      if (!across_jumps) {
-        const std::size_t base = static_cast<std::size_t>(run.row) * width;
-        const std::size_t other_base = static_cast<std::size_t>(other_row) * width;
+      if (!across_jumps_) {
+        const std::size_t base = static_cast<std::size_t>(run.row) * width_;
+        const std::size_t other_base = static_cast<std::size_t>(other_row) * width_;
         length = 0;
         for (int x = begin; x < end; ++x) length += connected(base + x, other_base + x) ? 1 : 0;
       }
       if (length > 0) tally(c, p, length);
     }
-  };
-  bool changed = true;
-  while (changed || !across_jumps) {
-    if (!changed) across_jumps = true;  // second round: pieces walled in by depth jumps
-    changed = false;
-    for (int c = 0; c < component_count; ++c) {
-      if (final_label[c] != kUnresolved) continue;
-      border.clear();
-      for (int s = stray_start[c]; s < stray_start[c + 1]; ++s) {
-        const int r = stray_runs[s];
-        const Run& run = runs[r];
-        const std::size_t base = static_cast<std::size_t>(run.row) * width;
-        if (r > row_first[run.row] && runs[r - 1].end == run.begin &&
-            (across_jumps || connected(base + run.begin, base + run.begin - 1))) {
-          tally(c, r - 1, 1);
-        }
-        if (r + 1 < row_first[run.row + 1] && runs[r + 1].begin == run.end &&
-            (across_jumps || connected(base + run.end - 1, base + run.end))) {
-          tally(c, r + 1, 1);
-        }
-        if (run.row > 0) tally_row(c, run, run.row - 1);
-        if (run.row + 1 < height) tally_row(c, run, run.row + 1);
-      }
-      if (border.empty()) continue;
-      auto best = border.begin();
-      for (auto it = border.begin(); it != border.end(); ++it) {
-        if (it->second > best->second || (it->second == best->second && it->first < best->first)) {
-          best = it;
-        }
-      }
-      final_label[c] = best->first;
-      changed = true;
-    }
-  }
-  // Islands that touch no label (e.g. surrounded by invalid depth).
-  for (int c = 0; c < component_count; ++c) {
-    if (final_label[c] != kUnresolved) continue;
-    final_label[c] = component_weight[c] >= min_weight ? next_new_label++ : -1;
   }
 
-  // Renumber 0..m-1 in order of first appearance; pixels outside any run become -1. One pass
-  // over each row: the gaps between its runs, then each run.
-  std::vector<int> renumber(static_cast<std::size_t>(next_new_label), -1);
-  int count = 0;
-  for (int row = 0; row < height; ++row) {
-    int* row_labels = label + static_cast<std::size_t>(row) * width;
-    int x = 0;
-    for (int r = row_first[row]; r < row_first[row + 1]; ++r) {
-      const Run& run = runs[r];
-      std::fill(row_labels + x, row_labels + run.begin, -1);
-      int value = final_label[component_of_run[r]];
-      if (value >= 0) {
-        int& mapped = renumber[static_cast<std::size_t>(value)];
-        if (mapped < 0) mapped = count++;
-        value = mapped;
+  // The label of the resolved neighbour that stray piece c shares the longest border with
+  // (the smaller label on a tie), or kUnresolved. Neighbours are found among the runs of its
+  // own and the adjacent rows (pixels in no run are unusable and count for nothing).
+  int bestNeighbour(int c) {
+    border_.clear();
+    for (int s = stray_start_[c]; s < stray_start_[c + 1]; ++s) {
+      const int r = stray_runs_[s];
+      const Run& run = runs_[r];
+      const std::size_t base = static_cast<std::size_t>(run.row) * width_;
+      if (r > row_first_[run.row] && runs_[r - 1].end == run.begin &&
+          (across_jumps_ || connected(base + run.begin, base + run.begin - 1))) {
+        tally(c, r - 1, 1);
       }
-      std::fill(row_labels + run.begin, row_labels + run.end, value);
-      x = run.end;
+      if (r + 1 < row_first_[run.row + 1] && runs_[r + 1].begin == run.end &&
+          (across_jumps_ || connected(base + run.end - 1, base + run.end))) {
+        tally(c, r + 1, 1);
+      }
+      if (run.row > 0) tallyRow(c, run, run.row - 1);
+      if (run.row + 1 < height_) tallyRow(c, run, run.row + 1);
     }
-    std::fill(row_labels + x, row_labels + width, -1);
+    if (border_.empty()) return kUnresolved;
+    auto best = border_.begin();
+    for (auto it = border_.begin(); it != border_.end(); ++it) {
+      if (it->second > best->second || (it->second == best->second && it->first < best->first)) {
+        best = it;
+      }
+    }
+    return best->first;
   }
-  return count;
+
+  // Stray pieces join their best neighbour; repeat while pieces that only touch other stray
+  // pieces get resolved through them. Borders across a depth jump count only for pieces that
+  // have no other way to a label (a second round).
+  void resolveStrayPieces() {
+    across_jumps_ = z_ == nullptr;
+    bool changed = true;
+    while (changed || !across_jumps_) {
+      if (!changed) across_jumps_ = true;
+      changed = false;
+      for (int c = 0; c < component_count_; ++c) {
+        if (final_label_[c] != kUnresolved) continue;
+        const int value = bestNeighbour(c);
+        if (value == kUnresolved) continue;
+        final_label_[c] = value;
+        changed = true;
+      }
+    }
+  }
+
+  // Islands that touch no label (e.g. surrounded by invalid depth).
+  void labelIslands() {
+    for (int c = 0; c < component_count_; ++c) {
+      if (final_label_[c] != kUnresolved) continue;
+      final_label_[c] = component_weight_[c] >= min_weight_ ? next_new_label_++ : -1;
+    }
+  }
+
+  // Renumbers 0..m-1 in order of first appearance; pixels outside any run become -1. One pass
+  // over each row: the gaps between its runs, then each run. Returns m.
+  int writeLabels() {
+    std::vector<int> renumber(static_cast<std::size_t>(next_new_label_), -1);
+    int count = 0;
+    for (int row = 0; row < height_; ++row) {
+      int* row_labels = label_ + static_cast<std::size_t>(row) * width_;
+      int x = 0;
+      for (int r = row_first_[row]; r < row_first_[row + 1]; ++r) {
+        const Run& run = runs_[r];
+        std::fill(row_labels + x, row_labels + run.begin, -1);
+        int value = final_label_[component_of_run_[r]];
+        if (value >= 0) {
+          int& mapped = renumber[static_cast<std::size_t>(value)];
+          if (mapped < 0) mapped = count++;
+          value = mapped;
+        }
+        std::fill(row_labels + run.begin, row_labels + run.end, value);
+        x = run.end;
+      }
+      std::fill(row_labels + x, row_labels + width_, -1);
+    }
+    return count;
+  }
+
+  const int width_, height_;
+  int* const label_;
+  const std::uint8_t* const ok_;
+  const float* const pixel_weight_;
+  const float* const z_;
+  const float depth_jump_ratio_;
+  const double min_weight_;
+
+  std::vector<Run> runs_;
+  std::vector<float> run_weight_;
+  std::vector<int> row_first_, parent_, component_of_run_;
+  int run_count_ = 0;
+  std::vector<int> component_label_, component_size_;
+  std::vector<double> component_weight_;
+  int component_count_ = 0;
+  std::vector<int> final_label_;  // per component: label, -1, or kUnresolved
+  int next_new_label_ = 0;
+  std::vector<int> stray_start_, stray_runs_;
+  std::vector<std::pair<int, int>> border_;  // (label, border length) of one stray piece
+  bool across_jumps_ = false;
+};
+
+}  // namespace
+
+int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
+                        double min_weight, const cv::Mat& depth, float depth_jump_ratio) {
+  checkConnectivityInputs(labels, valid, weight, depth, depth_jump_ratio);
+  return ConnectivityPass(labels, valid, weight, min_weight, depth, depth_jump_ratio).run();
 }
 
 std::vector<Superpixel> fitSuperpoints(const cv::Mat& labels, const PixelFeatures& features,

@@ -56,6 +56,158 @@ void writeCsv(const std::filesystem::path& path, const std::vector<std::string>&
   }
 }
 
+// What to run: the methods (with the names they get in the outputs), the counts K, their options.
+struct Job {
+  std::vector<dasp::peers::Method> methods;
+  std::vector<std::string> output_names;
+  std::vector<int> counts;
+  dasp::peers::MethodOptions options;
+  dasp::Intrinsics intrinsics;
+};
+
+// Every method at every K on one frame.
+std::vector<Row> evaluateFrame(const dasp::RgbdFramePaths& paths, int frame_index, const Job& job) {
+  const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, job.intrinsics);
+  const cv::Mat gt = *dasp::loadLabelImage(paths);
+  const dasp::PixelFeatures features = dasp::computeFeatures(frame);
+  const dasp::peers::FrameReference ref = dasp::peers::makeFrameReference(frame, gt, features);
+  std::vector<Row> rows;
+  for (std::size_t m = 0; m < job.methods.size(); ++m) {
+    for (int k : job.counts) {
+      Row row;
+      row.frame = paths.name;
+      row.frame_index = frame_index;
+      row.method = job.output_names[m];
+      row.method_index = static_cast<int>(m);
+      row.k = k;
+      try {
+        dasp::peers::MethodOptions o = job.options;
+        o.superpixel_count = k;
+        o.threads = 1;
+        const dasp::peers::MethodResult result = runMethod(job.methods[m], frame, o);
+        row.time_ms = result.cpu_milliseconds;
+        row.wall_ms = result.wall_milliseconds;
+        row.metrics = dasp::peers::evaluateLabels(result.labels, ref, k);
+      } catch (const std::exception& e) {
+        row.error = e.what();
+      }
+      rows.push_back(std::move(row));
+    }
+  }
+  return rows;
+}
+
+// All frames, `threads` at a time; rows sorted by method, K and frame. A frame that cannot be
+// read is reported and skipped.
+std::vector<Row> evaluateFrames(const std::vector<dasp::RgbdFramePaths>& frames, const Job& job,
+                                int threads) {
+  std::vector<Row> rows;
+  std::mutex mutex;
+  std::atomic<std::size_t> next{0};
+  auto worker = [&]() {
+    for (std::size_t f = next++; f < frames.size(); f = next++) {
+      std::vector<Row> local;
+      try {
+        local = evaluateFrame(frames[f], static_cast<int>(f), job);
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex);
+        std::cerr << "dasp_evaluate: frame " << frames[f].name << ": " << e.what() << "\n";
+        continue;
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      std::cerr << "frame " << frames[f].name << " done (" << f + 1 << "/" << frames.size()
+                << ")\n";
+      for (Row& r : local) rows.push_back(std::move(r));
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
+    return std::tie(a.method_index, a.k, a.frame_index) <
+           std::tie(b.method_index, b.k, b.frame_index);
+  });
+  return rows;
+}
+
+// per_frame.csv and per_frame.json.
+void writePerFrame(const std::filesystem::path& out_dir, const std::vector<Row>& rows) {
+  const std::vector<std::string>& names = dasp::peers::metricNames();
+  std::vector<std::string> header = {"frame", "method", "k", "time_ms", "wall_ms"};
+  header.insert(header.end(), names.begin(), names.end());
+  header.push_back("error");
+  std::vector<std::vector<std::string>> table;
+  nlohmann::json per_frame = nlohmann::json::array();
+  for (const Row& r : rows) {
+    std::vector<std::string> line = {r.frame, r.method, std::to_string(r.k),
+                                     r.error.empty() ? number(r.time_ms) : "",
+                                     r.error.empty() ? number(r.wall_ms) : ""};
+    nlohmann::json j = {{"frame", r.frame}, {"method", r.method}, {"k", r.k}};
+    if (r.error.empty()) {
+      j["time_ms"] = r.time_ms;
+      j["wall_ms"] = r.wall_ms;
+    }
+    for (const std::string& n : names) {
+      const auto it = r.metrics.find(n);
+      line.push_back(it == r.metrics.end() ? "" : number(it->second));
+      if (it != r.metrics.end()) j[n] = it->second;
+    }
+    std::string error = r.error;
+    std::replace(error.begin(), error.end(), ',', ';');
+    line.push_back(error);
+    if (!r.error.empty()) j["error"] = r.error;
+    table.push_back(std::move(line));
+    per_frame.push_back(std::move(j));
+  }
+  writeCsv(out_dir / "per_frame.csv", header, table);
+  std::ofstream(out_dir / "per_frame.json") << per_frame.dump(1) << "\n";
+}
+
+// mean.csv: means over the frames where the method succeeded; returns them as JSON.
+nlohmann::json writeMeans(const std::filesystem::path& out_dir, const std::vector<Row>& rows,
+                          const Job& job) {
+  const std::vector<std::string>& names = dasp::peers::metricNames();
+  std::vector<std::string> mean_header = {"method",        "k",       "frames",
+                                          "failed_frames", "time_ms", "wall_ms"};
+  mean_header.insert(mean_header.end(), names.begin(), names.end());
+  std::vector<std::vector<std::string>> mean_table;
+  nlohmann::json means = nlohmann::json::array();
+  for (std::size_t m = 0; m < job.methods.size(); ++m) {
+    for (int k : job.counts) {
+      std::map<std::string, double> sum;
+      int ok = 0;
+      int failed = 0;
+      for (const Row& r : rows) {
+        if (r.method_index != static_cast<int>(m) || r.k != k) continue;
+        if (!r.error.empty()) {
+          ++failed;
+          continue;
+        }
+        ++ok;
+        sum["time_ms"] += r.time_ms;
+        sum["wall_ms"] += r.wall_ms;
+        for (const auto& [n, v] : r.metrics) sum[n] += v;
+      }
+      const std::string& method = job.output_names[m];
+      std::vector<std::string> line = {method, std::to_string(k), std::to_string(ok),
+                                       std::to_string(failed)};
+      nlohmann::json j = {{"method", method}, {"k", k}, {"frames", ok}, {"failed_frames", failed}};
+      for (const std::string& n : std::vector<std::string>{"time_ms", "wall_ms"}) {
+        line.push_back(ok ? number(sum[n] / ok) : "");
+        if (ok) j[n] = sum[n] / ok;
+      }
+      for (const std::string& n : names) {
+        line.push_back(ok ? number(sum[n] / ok) : "");
+        if (ok) j[n] = sum[n] / ok;
+      }
+      mean_table.push_back(std::move(line));
+      means.push_back(std::move(j));
+    }
+  }
+  writeCsv(out_dir / "mean.csv", mean_header, mean_table);
+  return means;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,25 +218,24 @@ int main(int argc, char** argv) {
   std::string data_dir;
   std::string out_dir = "dasp_eval";
   std::vector<std::string> method_names = {"DASP", "ASP_RGB", "ASP_RGBD", "SLIC", "SEEDS", "VCCS"};
-  std::vector<int> counts = {250, 500, 1000, 2000};
-  dasp::peers::MethodOptions options;
-  dasp::Intrinsics intrinsics;
+  Job job;
+  job.counts = {250, 500, 1000, 2000};
   int threads = 1;
   int max_frames = 0;
   app.add_option("--data", data_dir, "dataset folder")->required()->check(CLI::ExistingDirectory);
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   app.add_option("--methods", method_names, "DASP ASP_RGB ASP_RGBD SLIC SEEDS VCCS")
       ->capture_default_str();
-  app.add_option("-k,--counts", counts, "superpixel counts K")->capture_default_str();
-  dasp::peers::addMethodOptions(app, options);
+  app.add_option("-k,--counts", job.counts, "superpixel counts K")->capture_default_str();
+  dasp::peers::addMethodOptions(app, job.options);
   std::string name_suffix;
   app.add_option("--name-suffix", name_suffix,
                  "appended to every method name in the outputs (to merge runs with other "
                  "options, e.g. DASP_wd1)");
-  app.add_option("--fx", intrinsics.fx)->capture_default_str();
-  app.add_option("--fy", intrinsics.fy)->capture_default_str();
-  app.add_option("--cx", intrinsics.cx)->capture_default_str();
-  app.add_option("--cy", intrinsics.cy)->capture_default_str();
+  app.add_option("--fx", job.intrinsics.fx)->capture_default_str();
+  app.add_option("--fy", job.intrinsics.fy)->capture_default_str();
+  app.add_option("--cx", job.intrinsics.cx)->capture_default_str();
+  app.add_option("--cy", job.intrinsics.cy)->capture_default_str();
   app.add_option("-j,--threads", threads,
                  "frames processed in parallel; every method itself runs single-threaded")
       ->capture_default_str();
@@ -93,14 +244,12 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    std::vector<dasp::peers::Method> methods;
-    for (const std::string& name : method_names) methods.push_back(dasp::peers::parseMethod(name));
-    // The names in the outputs, with the suffix of this run.
-    std::vector<std::string> output_names;
-    for (const dasp::peers::Method method : methods) {
-      output_names.push_back(dasp::peers::methodName(method) + name_suffix);
+    for (const std::string& name : method_names) {
+      job.methods.push_back(dasp::peers::parseMethod(name));
+      // The names in the outputs, with the suffix of this run.
+      job.output_names.push_back(dasp::peers::methodName(job.methods.back()) + name_suffix);
     }
-    for (int k : counts) {
+    for (int k : job.counts) {
       if (k < 1) throw std::invalid_argument("every K must be >= 1");
     }
     if (threads < 1) threads = 1;
@@ -116,131 +265,10 @@ int main(int argc, char** argv) {
     if (frames.empty()) throw std::invalid_argument("no labelled frame in " + data_dir);
     std::filesystem::create_directories(out_dir);
 
-    std::vector<Row> rows;
-    std::mutex mutex;
-    std::atomic<std::size_t> next{0};
-    auto worker = [&]() {
-      for (std::size_t f = next++; f < frames.size(); f = next++) {
-        const dasp::RgbdFramePaths& paths = frames[f];
-        std::vector<Row> local;
-        try {
-          const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, intrinsics);
-          const cv::Mat gt = *dasp::loadLabelImage(paths);
-          const dasp::PixelFeatures features = dasp::computeFeatures(frame);
-          const dasp::peers::FrameReference ref =
-              dasp::peers::makeFrameReference(frame, gt, features);
-          for (std::size_t m = 0; m < methods.size(); ++m) {
-            for (int k : counts) {
-              Row row;
-              row.frame = paths.name;
-              row.frame_index = static_cast<int>(f);
-              row.method = output_names[m];
-              row.method_index = static_cast<int>(m);
-              row.k = k;
-              try {
-                dasp::peers::MethodOptions o = options;
-                o.superpixel_count = k;
-                o.threads = 1;
-                const dasp::peers::MethodResult result = runMethod(methods[m], frame, o);
-                row.time_ms = result.cpu_milliseconds;
-                row.wall_ms = result.wall_milliseconds;
-                row.metrics = dasp::peers::evaluateLabels(result.labels, ref, k);
-              } catch (const std::exception& e) {
-                row.error = e.what();
-              }
-              local.push_back(std::move(row));
-            }
-          }
-        } catch (const std::exception& e) {
-          std::lock_guard<std::mutex> lock(mutex);
-          std::cerr << "dasp_evaluate: frame " << paths.name << ": " << e.what() << "\n";
-          continue;
-        }
-        std::lock_guard<std::mutex> lock(mutex);
-        std::cerr << "frame " << paths.name << " done (" << f + 1 << "/" << frames.size() << ")\n";
-        for (Row& r : local) rows.push_back(std::move(r));
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-    for (std::thread& t : pool) t.join();
-
-    std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
-      return std::tie(a.method_index, a.k, a.frame_index) <
-             std::tie(b.method_index, b.k, b.frame_index);
-    });
-    const std::vector<std::string>& names = dasp::peers::metricNames();
-
-    // Per frame.
-    std::vector<std::string> header = {"frame", "method", "k", "time_ms", "wall_ms"};
-    header.insert(header.end(), names.begin(), names.end());
-    header.push_back("error");
-    std::vector<std::vector<std::string>> table;
-    nlohmann::json per_frame = nlohmann::json::array();
-    for (const Row& r : rows) {
-      std::vector<std::string> line = {r.frame, r.method, std::to_string(r.k),
-                                       r.error.empty() ? number(r.time_ms) : "",
-                                       r.error.empty() ? number(r.wall_ms) : ""};
-      nlohmann::json j = {{"frame", r.frame}, {"method", r.method}, {"k", r.k}};
-      if (r.error.empty()) {
-        j["time_ms"] = r.time_ms;
-        j["wall_ms"] = r.wall_ms;
-      }
-      for (const std::string& n : names) {
-        const auto it = r.metrics.find(n);
-        line.push_back(it == r.metrics.end() ? "" : number(it->second));
-        if (it != r.metrics.end()) j[n] = it->second;
-      }
-      std::string error = r.error;
-      std::replace(error.begin(), error.end(), ',', ';');
-      line.push_back(error);
-      if (!r.error.empty()) j["error"] = r.error;
-      table.push_back(std::move(line));
-      per_frame.push_back(std::move(j));
-    }
-    writeCsv(std::filesystem::path(out_dir) / "per_frame.csv", header, table);
-    std::ofstream(std::filesystem::path(out_dir) / "per_frame.json") << per_frame.dump(1) << "\n";
-
-    // Means over the frames where the method succeeded.
-    std::vector<std::string> mean_header = {"method",        "k",       "frames",
-                                            "failed_frames", "time_ms", "wall_ms"};
-    mean_header.insert(mean_header.end(), names.begin(), names.end());
-    std::vector<std::vector<std::string>> mean_table;
-    nlohmann::json means = nlohmann::json::array();
-    for (std::size_t m = 0; m < methods.size(); ++m) {
-      for (int k : counts) {
-        std::map<std::string, double> sum;
-        int ok = 0;
-        int failed = 0;
-        for (const Row& r : rows) {
-          if (r.method_index != static_cast<int>(m) || r.k != k) continue;
-          if (!r.error.empty()) {
-            ++failed;
-            continue;
-          }
-          ++ok;
-          sum["time_ms"] += r.time_ms;
-          sum["wall_ms"] += r.wall_ms;
-          for (const auto& [n, v] : r.metrics) sum[n] += v;
-        }
-        const std::string& method = output_names[m];
-        std::vector<std::string> line = {method, std::to_string(k), std::to_string(ok),
-                                         std::to_string(failed)};
-        nlohmann::json j = {
-            {"method", method}, {"k", k}, {"frames", ok}, {"failed_frames", failed}};
-        for (const std::string& n : std::vector<std::string>{"time_ms", "wall_ms"}) {
-          line.push_back(ok ? number(sum[n] / ok) : "");
-          if (ok) j[n] = sum[n] / ok;
-        }
-        for (const std::string& n : names) {
-          line.push_back(ok ? number(sum[n] / ok) : "");
-          if (ok) j[n] = sum[n] / ok;
-        }
-        mean_table.push_back(std::move(line));
-        means.push_back(std::move(j));
-      }
-    }
-    writeCsv(std::filesystem::path(out_dir) / "mean.csv", mean_header, mean_table);
+    const std::vector<Row> rows = evaluateFrames(frames, job, threads);
+    writePerFrame(out_dir, rows);
+    const nlohmann::json means = writeMeans(out_dir, rows, job);
+    const dasp::peers::MethodOptions& options = job.options;
     nlohmann::json summary = {{"data", data_dir},
                               {"frames", frames.size()},
                               {"iterations", options.iterations},

@@ -118,6 +118,181 @@ nlohmann::json ddsChurn(const dasp::RgbdFrame& frame, const dasp::DaspConfig& da
   return out;
 }
 
+// t-DASP on the next frame of its sequence.
+FrameResult runTdasp(dasp::TemporalDasp& tdasp, const dasp::RgbdFrame& frame, const cv::Mat& truth,
+                     const cv::Mat& mask) {
+  FrameResult t;
+  const auto t_frame = tdasp.process(frame);
+  t.segments = t_frame.segment_labels;
+  t.values["time_ms"] = t_frame.timings.total_ms;
+  t.values["superpixel_ms"] = t_frame.timings.superpixels_ms;
+  t.values["graph_ms"] = t_frame.timings.graph_ms;
+  t.values["spectral_ms"] = t_frame.timings.spectral_ms;
+  t.values["labelling_ms"] = t_frame.timings.labelling_ms;
+  t.values["strands"] = t_frame.strand_count;
+  t.values["strand_edges"] = t_frame.strand_edge_count;
+  t.values["seeds_kept"] = t_frame.superpixels.seeds_kept;
+  t.values["seeds_added"] = t_frame.superpixels.seeds_added;
+  t.values["seeds_removed"] = t_frame.superpixels.seeds_removed;
+  t.values["strands_continued"] = tdasp.strandGraph().continuedLastFrame();
+  addPartitionMetrics(t.values, "sp_", t_frame.superpixels.superpixels.labels, truth, mask);
+  addPartitionMetrics(t.values, "seg_", t.segments, truth, mask);
+  return t;
+}
+
+// s-DASP on one frame with t-DASP's parameters (threshold = the hysteresis' t_normal).
+FrameResult runSdasp(const dasp::TdaspConfig& config, const dasp::RgbdFrame& frame,
+                     const cv::Mat& truth, const cv::Mat& mask) {
+  FrameResult s;
+  const auto start = std::chrono::steady_clock::now();
+  const dasp::Superpixels sp = dasp::computeDasp(frame, config.superpixels.dasp);
+  dasp::SdaspConfig sdasp_config;
+  sdasp_config.graph = config.strands.graph;
+  sdasp_config.spectral = config.spectral;
+  sdasp_config.threshold = config.hysteresis.normal;
+  const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, sdasp_config);
+  s.segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, sdasp_config.threshold));
+  s.values["time_ms"] =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  addPartitionMetrics(s.values, "sp_", sp.labels, truth, mask);
+  addPartitionMetrics(s.values, "seg_", s.segments, truth, mask);
+  return s;
+}
+
+// A sequence's frames as the metrics need them.
+struct SequenceFrames {
+  std::vector<cv::Mat> depths, truths, masks;
+  std::vector<Eigen::Isometry3f> poses;
+};
+
+// Temporal consistency of frame k to k+1, for both methods and the ground truth.
+void addConsistency(const SequenceFrames& seq, const dasp::Intrinsics& intrinsics,
+                    std::vector<FrameResult>& t_results, std::vector<FrameResult>& s_results) {
+  using dasp::metrics::LabelMatching;
+  for (std::size_t k = 0; k + 1 < seq.depths.size(); ++k) {
+    const Eigen::Isometry3f next_from_current = seq.poses[k + 1].inverse() * seq.poses[k];
+    auto consistency = [&](const cv::Mat& a, const cv::Mat& b, LabelMatching m) {
+      // Only pixels with a ground-truth label are compared (the evaluation mask).
+      cv::Mat a_masked = a.clone(), b_masked = b.clone();
+      a_masked.setTo(-1, seq.masks[k] == 0);
+      b_masked.setTo(-1, seq.masks[k + 1] == 0);
+      return dasp::metrics::temporalLabelConsistency(a_masked, seq.depths[k], b_masked,
+                                                     seq.depths[k + 1], intrinsics,
+                                                     next_from_current, m)
+          .consistency;
+    };
+    for (std::vector<FrameResult>* results : {&t_results, &s_results}) {
+      FrameResult& r = (*results)[k];
+      const cv::Mat& next = (*results)[k + 1].segments;
+      r.values["consistency_identity"] = consistency(r.segments, next, LabelMatching::kIdentity);
+      r.values["consistency_best_overlap"] =
+          consistency(r.segments, next, LabelMatching::kBestOverlap);
+    }
+    const double truth_consistency =
+        consistency(seq.truths[k], seq.truths[k + 1], LabelMatching::kIdentity);
+    t_results[k].values["consistency_truth"] = truth_consistency;
+    s_results[k].values["consistency_truth"] = truth_consistency;
+  }
+}
+
+// <out>/<name>.csv (a row per frame and method); the means go into `summary` under the
+// methods' names.
+void writeResults(const fs::path& out_dir, const std::string& name,
+                  const std::vector<FrameResult>& t_results,
+                  const std::vector<FrameResult>& s_results, nlohmann::json& summary) {
+  std::ofstream csv(out_dir / (name + ".csv"));
+  std::vector<std::string> keys;
+  for (const auto& r : {t_results, s_results}) {
+    for (const auto& fr : r) {
+      for (const auto& [key, value] : fr.values) {
+        if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+      }
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  csv << "sequence,method,frame";
+  for (const auto& key : keys) csv << ',' << key;
+  csv << '\n';
+  for (const auto& [method, results] :
+       {std::pair<std::string, const std::vector<FrameResult>*>{"tdasp", &t_results},
+        {"sdasp", &s_results}}) {
+    std::map<std::string, std::pair<double, int>> sums;
+    for (std::size_t k = 0; k < results->size(); ++k) {
+      const auto& values = (*results)[k].values;
+      csv << name << ',' << method << ',' << k;
+      for (const auto& key : keys) {
+        const auto it = values.find(key);
+        csv << ',';
+        if (it != values.end()) {
+          csv << std::setprecision(8) << it->second;
+          sums[key].first += it->second;
+          ++sums[key].second;
+        }
+      }
+      csv << '\n';
+    }
+    for (const auto& [key, sum] : sums) summary[method][key] = sum.first / sum.second;
+  }
+}
+
+void printSummary(const std::string& name, const nlohmann::json& summary) {
+  std::cout << std::fixed << std::setprecision(3) << name << ": consistency t-DASP identity "
+            << summary["tdasp"]["consistency_identity"].get<double>() << " (best overlap "
+            << summary["tdasp"]["consistency_best_overlap"].get<double>()
+            << "), s-DASP best overlap "
+            << summary["sdasp"]["consistency_best_overlap"].get<double>() << ", truth "
+            << summary["tdasp"]["consistency_truth"].get<double>() << "; segment F1 t-DASP "
+            << summary["tdasp"]["seg_boundary_f1"].get<double>() << " s-DASP "
+            << summary["sdasp"]["seg_boundary_f1"].get<double>() << "; segments t-DASP "
+            << summary["tdasp"]["seg_count"].get<double>() << " s-DASP "
+            << summary["sdasp"]["seg_count"].get<double>() << "; ms/frame t-DASP "
+            << summary["tdasp"]["time_ms"].get<double>() << " s-DASP "
+            << summary["sdasp"]["time_ms"].get<double>() << '\n';
+}
+
+// One sequence folder: both methods on every frame, the metrics, <out>/<name>.{csv,json}.
+void evaluateSequence(const std::string& folder, const dasp::TdaspConfig& config,
+                      const fs::path& out_dir, const std::string& image_dir) {
+  const dasp::Intrinsics intrinsics;
+  const std::string name = fs::path(folder).filename().string();
+  const auto frames = dasp::listRgbdFolder(folder);
+  SequenceFrames seq;
+  seq.poses = readPoses(fs::path(folder) / "poses.txt");
+  if (frames.size() != seq.poses.size() || frames.empty()) {
+    throw std::runtime_error(folder + ": frame and pose counts differ");
+  }
+  dasp::TemporalDasp tdasp(config);
+  const nlohmann::json churn =
+      ddsChurn(dasp::loadRgbdFrame(frames.front(), intrinsics), config.superpixels.dasp);
+  std::vector<FrameResult> t_results, s_results;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const dasp::RgbdFrame frame = dasp::loadRgbdFrame(frames[k], intrinsics);
+    const cv::Mat truth = *dasp::loadLabelImage(frames[k]);
+    const cv::Mat mask = (truth > 0) & (frame.depth > 0);
+    seq.depths.push_back(frame.depth);
+    seq.truths.push_back(truth);
+    seq.masks.push_back(mask);
+    t_results.push_back(runTdasp(tdasp, frame, truth, mask));
+    s_results.push_back(runSdasp(config, frame, truth, mask));
+    if (!image_dir.empty()) {
+      fs::create_directories(fs::path(image_dir) / name);
+      const std::string base = (fs::path(image_dir) / name / frames[k].name).string();
+      cv::imwrite(base + "_tdasp.png", colourise(t_results.back().segments));
+      cv::imwrite(base + "_sdasp.png", colourise(s_results.back().segments));
+    }
+  }
+  addConsistency(seq, intrinsics, t_results, s_results);
+  nlohmann::json summary;
+  summary["sequence"] = name;
+  summary["frames"] = frames.size();
+  summary["superpixels"] = config.superpixels.dasp.superpixel_count;
+  summary["seed"] = config.superpixels.dasp.seed;
+  summary["dds_churn_static"] = churn;
+  writeResults(out_dir, name, t_results, s_results, summary);
+  std::ofstream(out_dir / (name + ".json")) << summary.dump(2) << '\n';
+  printSummary(name, summary);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -146,148 +321,8 @@ int main(int argc, char** argv) {
     config.superpixels.dasp.superpixel_count = superpixel_count;
     config.superpixels.dasp.seed = seed;
     fs::create_directories(out_dir);
-    const dasp::Intrinsics intrinsics;
     for (const std::string& folder : sequences) {
-      const std::string name = fs::path(folder).filename().string();
-      const auto frames = dasp::listRgbdFolder(folder);
-      const auto poses = readPoses(fs::path(folder) / "poses.txt");
-      if (frames.size() != poses.size() || frames.empty()) {
-        throw std::runtime_error(folder + ": frame and pose counts differ");
-      }
-      dasp::TemporalDasp tdasp(config);
-      const nlohmann::json churn =
-          ddsChurn(dasp::loadRgbdFrame(frames.front(), intrinsics), config.superpixels.dasp);
-      std::vector<FrameResult> t_results, s_results;
-      std::vector<cv::Mat> depths, truths, masks;
-      for (std::size_t k = 0; k < frames.size(); ++k) {
-        const dasp::RgbdFrame frame = dasp::loadRgbdFrame(frames[k], intrinsics);
-        const cv::Mat truth = *dasp::loadLabelImage(frames[k]);
-        const cv::Mat mask = (truth > 0) & (frame.depth > 0);
-        depths.push_back(frame.depth);
-        truths.push_back(truth);
-        masks.push_back(mask);
-
-        FrameResult t;
-        const auto t_frame = tdasp.process(frame);
-        t.segments = t_frame.segment_labels;
-        t.values["time_ms"] = t_frame.timings.total_ms;
-        t.values["superpixel_ms"] = t_frame.timings.superpixels_ms;
-        t.values["graph_ms"] = t_frame.timings.graph_ms;
-        t.values["spectral_ms"] = t_frame.timings.spectral_ms;
-        t.values["labelling_ms"] = t_frame.timings.labelling_ms;
-        t.values["strands"] = t_frame.strand_count;
-        t.values["strand_edges"] = t_frame.strand_edge_count;
-        t.values["seeds_kept"] = t_frame.superpixels.seeds_kept;
-        t.values["seeds_added"] = t_frame.superpixels.seeds_added;
-        t.values["seeds_removed"] = t_frame.superpixels.seeds_removed;
-        t.values["strands_continued"] = tdasp.strandGraph().continuedLastFrame();
-        addPartitionMetrics(t.values, "sp_", t_frame.superpixels.superpixels.labels, truth, mask);
-        addPartitionMetrics(t.values, "seg_", t.segments, truth, mask);
-        t_results.push_back(std::move(t));
-
-        FrameResult s;
-        const auto start = std::chrono::steady_clock::now();
-        const dasp::Superpixels sp = dasp::computeDasp(frame, config.superpixels.dasp);
-        dasp::SdaspConfig sdasp_config;
-        sdasp_config.graph = config.strands.graph;
-        sdasp_config.spectral = config.spectral;
-        sdasp_config.threshold = config.hysteresis.normal;
-        const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, sdasp_config);
-        s.segments =
-            dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, sdasp_config.threshold));
-        s.values["time_ms"] =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-        addPartitionMetrics(s.values, "sp_", sp.labels, truth, mask);
-        addPartitionMetrics(s.values, "seg_", s.segments, truth, mask);
-        s_results.push_back(std::move(s));
-
-        if (!image_dir.empty()) {
-          fs::create_directories(fs::path(image_dir) / name);
-          const std::string base = (fs::path(image_dir) / name / frames[k].name).string();
-          cv::imwrite(base + "_tdasp.png", colourise(t_results.back().segments));
-          cv::imwrite(base + "_sdasp.png", colourise(s_results.back().segments));
-        }
-      }
-      // Temporal consistency of frame k to k+1.
-      for (std::size_t k = 0; k + 1 < frames.size(); ++k) {
-        const Eigen::Isometry3f next_from_current = poses[k + 1].inverse() * poses[k];
-        auto consistency = [&](const cv::Mat& a, const cv::Mat& b, dasp::metrics::LabelMatching m) {
-          // Only pixels with a ground-truth label are compared (the evaluation mask).
-          cv::Mat a_masked = a.clone(), b_masked = b.clone();
-          a_masked.setTo(-1, masks[k] == 0);
-          b_masked.setTo(-1, masks[k + 1] == 0);
-          return dasp::metrics::temporalLabelConsistency(
-                     a_masked, depths[k], b_masked, depths[k + 1], intrinsics, next_from_current, m)
-              .consistency;
-        };
-        using dasp::metrics::LabelMatching;
-        t_results[k].values["consistency_identity"] =
-            consistency(t_results[k].segments, t_results[k + 1].segments, LabelMatching::kIdentity);
-        t_results[k].values["consistency_best_overlap"] = consistency(
-            t_results[k].segments, t_results[k + 1].segments, LabelMatching::kBestOverlap);
-        s_results[k].values["consistency_identity"] =
-            consistency(s_results[k].segments, s_results[k + 1].segments, LabelMatching::kIdentity);
-        s_results[k].values["consistency_best_overlap"] = consistency(
-            s_results[k].segments, s_results[k + 1].segments, LabelMatching::kBestOverlap);
-        const double truth_consistency =
-            consistency(truths[k], truths[k + 1], LabelMatching::kIdentity);
-        t_results[k].values["consistency_truth"] = truth_consistency;
-        s_results[k].values["consistency_truth"] = truth_consistency;
-      }
-      // CSV rows and means.
-      std::ofstream csv(fs::path(out_dir) / (name + ".csv"));
-      std::vector<std::string> keys;
-      for (const auto& r : {t_results, s_results}) {
-        for (const auto& fr : r) {
-          for (const auto& [key, value] : fr.values) {
-            if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
-          }
-        }
-      }
-      std::sort(keys.begin(), keys.end());
-      csv << "sequence,method,frame";
-      for (const auto& key : keys) csv << ',' << key;
-      csv << '\n';
-      nlohmann::json summary;
-      summary["sequence"] = name;
-      summary["frames"] = frames.size();
-      summary["superpixels"] = superpixel_count;
-      summary["seed"] = seed;
-      summary["dds_churn_static"] = churn;
-      for (const auto& [method, results] :
-           {std::pair<std::string, const std::vector<FrameResult>*>{"tdasp", &t_results},
-            {"sdasp", &s_results}}) {
-        std::map<std::string, std::pair<double, int>> sums;
-        for (std::size_t k = 0; k < results->size(); ++k) {
-          const auto& values = (*results)[k].values;
-          csv << name << ',' << method << ',' << k;
-          for (const auto& key : keys) {
-            const auto it = values.find(key);
-            csv << ',';
-            if (it != values.end()) {
-              csv << std::setprecision(8) << it->second;
-              sums[key].first += it->second;
-              ++sums[key].second;
-            }
-          }
-          csv << '\n';
-        }
-        for (const auto& [key, sum] : sums) summary[method][key] = sum.first / sum.second;
-      }
-      std::ofstream(fs::path(out_dir) / (name + ".json")) << summary.dump(2) << '\n';
-      std::cout << std::fixed << std::setprecision(3) << name << ": consistency t-DASP identity "
-                << summary["tdasp"]["consistency_identity"].get<double>() << " (best overlap "
-                << summary["tdasp"]["consistency_best_overlap"].get<double>()
-                << "), s-DASP best overlap "
-                << summary["sdasp"]["consistency_best_overlap"].get<double>() << ", truth "
-                << summary["tdasp"]["consistency_truth"].get<double>() << "; segment F1 t-DASP "
-                << summary["tdasp"]["seg_boundary_f1"].get<double>() << " s-DASP "
-                << summary["sdasp"]["seg_boundary_f1"].get<double>() << "; segments t-DASP "
-                << summary["tdasp"]["seg_count"].get<double>() << " s-DASP "
-                << summary["sdasp"]["seg_count"].get<double>() << "; ms/frame t-DASP "
-                << summary["tdasp"]["time_ms"].get<double>() << " s-DASP "
-                << summary["sdasp"]["time_ms"].get<double>() << '\n';
+      evaluateSequence(folder, config, out_dir, image_dir);
     }
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << '\n';

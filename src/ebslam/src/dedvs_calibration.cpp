@@ -151,14 +151,24 @@ void LedCalibrationRunConfig::validate() const {
           "LedCalibrationRunConfig: outlier_event_fraction must lie in [0, 0.9]");
 }
 
-LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config) {
-  config.validate();
-  const DedvsSimulatorConfig& sim = config.simulator;
-  const DedvsSimulator simulator(sim);
-  std::mt19937_64 rng(config.seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::normal_distribution<double> gauss(0.0, 1.0);
+namespace {
 
+// Pixels of the depth camera at least `margin` pixels inside its border.
+struct DepthView {
+  const PinholeCamera& camera;
+  double margin;
+
+  Eigen::Vector2d project(const Eigen::Vector3d& p) const {
+    return {camera.fx * p.x() / p.z() + camera.cx, camera.fy * p.y() / p.z() + camera.cy};
+  }
+  bool inside(const Eigen::Vector2d& u) const {
+    return u.x() >= margin && u.y() >= margin && u.x() <= camera.width - 1 - margin &&
+           u.y() <= camera.height - 1 - margin;
+  }
+};
+
+// The checkerboard plate (plane 0, in its own frame) and the LED at its centre.
+Scene calibrationPlate(const LedCalibrationRunConfig& config) {
   const double side = config.squares * config.square_size_m;
   TexturedPlane plate;
   plate.texture = checkerboard(config.squares);
@@ -168,52 +178,47 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
   Scene scene;
   scene.planes.push_back(plate);
   scene.background_intensity = 0.5;
-  const Eigen::Vector3d led_on_plate(0.5 * side, 0.5 * side, 0.0);  // centre of the middle square
-  BlinkingLed led;
-  led.position = led_on_plate;
-  led.plane_index = 0;
-  led.frequency_hz = config.led_frequency_hz;
-  led.radius_m = config.led_radius_m;
-  led.on_intensity = config.led_on_intensity;
+  return scene;
+}
 
-  // Plate poses (world = depth optical frame): the LED at a random eDVS pixel and depth, the
-  // plate facing the rig (its normal along -z) tilted about its x and y axes.
+// A depth-frame point of the LED for plate pose k: at a random eDVS pixel (every other pose in
+// the outer part of the image, where rotation and principal point differ most and the
+// distortion is largest) and depth, seen by the depth camera too.
+Eigen::Vector3d randomLedPoint(const LedCalibrationRunConfig& config, const DepthView& view, int k,
+                               std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const DedvsSimulatorConfig& sim = config.simulator;
   const CameraModel& edvs = sim.edvs;
-  const PinholeCamera& depth = sim.depth.camera;
   const double m = config.border_margin_px;
-  auto insideDepth = [&](const Eigen::Vector2d& u) {
-    return u.x() >= m && u.y() >= m && u.x() <= depth.width - 1 - m &&
-           u.y() <= depth.height - 1 - m;
-  };
-  auto projectDepth = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector2d(depth.fx * p.x() / p.z() + depth.cx,
-                           depth.fy * p.y() / p.z() + depth.cy);
-  };
+  for (int attempt = 0; attempt <= 10000; ++attempt) {
+    const Eigen::Vector2d v(m + unit(rng) * (edvs.width - 1 - 2 * m),
+                            m + unit(rng) * (edvs.height - 1 - 2 * m));
+    const Eigen::Vector2d centre(0.5 * (edvs.width - 1), 0.5 * (edvs.height - 1));
+    if (k % 2 == 1 && (v - centre).norm() < 0.3 * (edvs.width + edvs.height) / 2.0) continue;
+    const double z = config.min_depth_m + unit(rng) * (config.max_depth_m - config.min_depth_m);
+    const std::optional<Eigen::Vector3d> ray = edvs.backprojectRay(v);
+    if (!ray) continue;
+    const Eigen::Vector3d ray_depth = sim.depth_from_edvs.linear() * *ray;
+    if (!(ray_depth.z() > 0.0)) continue;
+    const double lambda = (z - sim.depth_from_edvs.translation().z()) / ray_depth.z();
+    if (!(lambda > 0.0)) continue;
+    const Eigen::Vector3d led_depth = sim.depth_from_edvs * (lambda * *ray);
+    if (view.inside(view.project(led_depth))) return led_depth;
+  }
+  throw std::invalid_argument(
+      "simulateLedCalibrationRun: the eDVS and depth views do not overlap at these depths");
+}
+
+// Plate poses (world = depth optical frame), each held for rest_s after a move of move_s: the
+// LED at randomLedPoint, the plate facing the rig (its normal along -z) tilted about its x and
+// y axes.
+Trajectory plateCalibrationPoses(const LedCalibrationRunConfig& config, const DepthView& view,
+                                 const Eigen::Vector3d& led_on_plate, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double period_s = config.move_s + config.rest_s;
   Trajectory plate_poses;
   for (int k = 0; k < config.poses; ++k) {
-    Eigen::Vector3d led_depth;
-    for (int attempt = 0;; ++attempt) {
-      if (attempt > 10000) {
-        throw std::invalid_argument(
-            "simulateLedCalibrationRun: the eDVS and depth views do not overlap at these depths");
-      }
-      const Eigen::Vector2d v(m + unit(rng) * (edvs.width - 1 - 2 * m),
-                              m + unit(rng) * (edvs.height - 1 - 2 * m));
-      // Every other pose in the outer part of the image, where rotation and principal point
-      // differ most (and the distortion is largest).
-      const Eigen::Vector2d centre(0.5 * (edvs.width - 1), 0.5 * (edvs.height - 1));
-      if (k % 2 == 1 && (v - centre).norm() < 0.3 * (edvs.width + edvs.height) / 2.0) continue;
-      const double z = config.min_depth_m + unit(rng) * (config.max_depth_m - config.min_depth_m);
-      const std::optional<Eigen::Vector3d> ray = edvs.backprojectRay(v);
-      if (!ray) continue;
-      const Eigen::Vector3d ray_depth = sim.depth_from_edvs.linear() * *ray;
-      if (!(ray_depth.z() > 0.0)) continue;
-      const double lambda = (z - sim.depth_from_edvs.translation().z()) / ray_depth.z();
-      if (!(lambda > 0.0)) continue;
-      led_depth = sim.depth_from_edvs * (lambda * *ray);
-      if (insideDepth(projectDepth(led_depth))) break;
-    }
+    const Eigen::Vector3d led_depth = randomLedPoint(config, view, k, rng);
     const double tilt = config.max_tilt_deg * kPi / 180.0;
     const Eigen::Matrix3d rotation =
         (Eigen::AngleAxisd((2.0 * unit(rng) - 1.0) * tilt, Eigen::Vector3d::UnitX()) *
@@ -226,57 +231,20 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
     plate_poses.push_back(toStamped(k * period_s, pose));
     plate_poses.push_back(toStamped(k * period_s + config.rest_s, pose));
   }
-  const double duration = plate_poses.back().t_s;  // the last pose rests only
-  MovingPlane moving;
-  moving.plane_index = 0;
-  moving.pose = plate_poses;
-  Trajectory rig;  // the rig stands still at the world origin
-  rig.push_back(toStamped(0.0, Eigen::Isometry3d::Identity()));
-  rig.push_back(toStamped(duration, Eigen::Isometry3d::Identity()));
+  return plate_poses;
+}
 
-  LedCalibrationRun run;
-  run.truth = sensorsOf(sim);
-  run.duration_s = duration;
+// Outlier events: uniformly random pixel, polarity and time, merged into the time-sorted events.
+void addOutlierEvents(const LedCalibrationRunConfig& config, std::mt19937_64& rng,
+                      LedCalibrationRun& run) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const CameraModel& edvs = config.simulator.edvs;
   std::vector<Event>& events = run.events;
-  std::vector<cv::Mat> frames;
-  std::vector<double> frame_times;
-  simulator.simulate(
-      scene, rig, 0.0, duration,
-      [&events](const std::vector<TrueDepthEvent>& batch) {
-        for (const TrueDepthEvent& e : batch) events.push_back(e.event);
-      },
-      [&](const DepthFrame& frame) {
-        frames.push_back(frame.depth_mm);
-        frame_times.push_back(frame.t_s);
-      },
-      {led}, {moving});
-
-  // The LED in the depth camera: its true pixel plus tracking noise, the depth from the
-  // measured plate surface around it.
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    const Eigen::Vector3d point =
-        toIsometry(interpolatePose(plate_poses, frame_times[f])) * led_on_plate;
-    const double noise_x = gauss(rng), noise_y = gauss(rng);
-    if (!(point.z() > 0.0)) continue;
-    const Eigen::Vector2d pixel =
-        projectDepth(point) + config.led_pixel_noise_px * Eigen::Vector2d(noise_x, noise_y);
-    if (!insideDepth(pixel)) continue;
-    const std::optional<double> z = planeDepthAt(frames[f], pixel, config.depth_fit_radius_px);
-    if (!z) continue;
-    DepthLedObservation observation;
-    observation.t_s = frame_times[f];
-    observation.pixel = pixel;
-    observation.depth_m = *z;
-    observation.true_point = point;
-    run.depth_observations.push_back(observation);
-  }
-
-  // Outlier events: uniformly random pixel, polarity and time.
   const double fraction = config.outlier_event_fraction;
   run.outlier_events = static_cast<std::size_t>(
       std::llround(static_cast<double>(events.size()) * fraction / (1.0 - fraction)));
   const std::size_t simulated = events.size();
-  const double duration_us = duration * 1e6;
+  const double duration_us = run.duration_s * 1e6;
   for (std::size_t k = 0; k < run.outlier_events; ++k) {
     Event e;
     e.t_us = static_cast<std::int64_t>(unit(rng) * duration_us);
@@ -289,6 +257,74 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
             [](const Event& a, const Event& b) { return a.t_us < b.t_us; });
   std::inplace_merge(events.begin(), events.begin() + static_cast<std::ptrdiff_t>(simulated),
                      events.end(), [](const Event& a, const Event& b) { return a.t_us < b.t_us; });
+}
+
+}  // namespace
+
+LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config) {
+  config.validate();
+  const DedvsSimulatorConfig& sim = config.simulator;
+  const DedvsSimulator simulator(sim);
+  std::mt19937_64 rng(config.seed);
+
+  const Scene scene = calibrationPlate(config);
+  const double side = config.squares * config.square_size_m;
+  const Eigen::Vector3d led_on_plate(0.5 * side, 0.5 * side, 0.0);  // centre of the middle square
+  BlinkingLed led;
+  led.position = led_on_plate;
+  led.plane_index = 0;
+  led.frequency_hz = config.led_frequency_hz;
+  led.radius_m = config.led_radius_m;
+  led.on_intensity = config.led_on_intensity;
+
+  const DepthView view{sim.depth.camera, config.border_margin_px};
+  const Trajectory plate_poses = plateCalibrationPoses(config, view, led_on_plate, rng);
+  const double duration = plate_poses.back().t_s;  // the last pose rests only
+  MovingPlane moving;
+  moving.plane_index = 0;
+  moving.pose = plate_poses;
+  Trajectory rig;  // the rig stands still at the world origin
+  rig.push_back(toStamped(0.0, Eigen::Isometry3d::Identity()));
+  rig.push_back(toStamped(duration, Eigen::Isometry3d::Identity()));
+
+  LedCalibrationRun run;
+  run.truth = sensorsOf(sim);
+  run.duration_s = duration;
+  std::vector<cv::Mat> frames;
+  std::vector<double> frame_times;
+  simulator.simulate(
+      scene, rig, 0.0, duration,
+      [&run](const std::vector<TrueDepthEvent>& batch) {
+        for (const TrueDepthEvent& e : batch) run.events.push_back(e.event);
+      },
+      [&](const DepthFrame& frame) {
+        frames.push_back(frame.depth_mm);
+        frame_times.push_back(frame.t_s);
+      },
+      {led}, {moving});
+
+  // The LED in the depth camera: its true pixel plus tracking noise, the depth from the
+  // measured plate surface around it.
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const Eigen::Vector3d point =
+        toIsometry(interpolatePose(plate_poses, frame_times[f])) * led_on_plate;
+    const double noise_x = gauss(rng), noise_y = gauss(rng);
+    if (!(point.z() > 0.0)) continue;
+    const Eigen::Vector2d pixel =
+        view.project(point) + config.led_pixel_noise_px * Eigen::Vector2d(noise_x, noise_y);
+    if (!view.inside(pixel)) continue;
+    const std::optional<double> z = planeDepthAt(frames[f], pixel, config.depth_fit_radius_px);
+    if (!z) continue;
+    DepthLedObservation observation;
+    observation.t_s = frame_times[f];
+    observation.pixel = pixel;
+    observation.depth_m = *z;
+    observation.true_point = point;
+    run.depth_observations.push_back(observation);
+  }
+
+  addOutlierEvents(config, rng, run);
   return run;
 }
 
@@ -498,120 +534,126 @@ const char* toString(CalibrationStatus status) {
   return "unknown";
 }
 
-DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& correspondences,
-                                      const DedvsSensors& base,
-                                      const DedvsCalibrationConfig& config) {
-  config.validate();
-  base.depth.validate();
-  require(correspondences.size() >= config.min_correspondences,
-          "calibrateDedvs: " + std::to_string(correspondences.size()) +
-              " correspondences, fewer than min_correspondences = " +
-              std::to_string(config.min_correspondences));
-  for (const LedCorrespondence& c : correspondences) {
-    require(c.depth_pixel.allFinite() && c.edvs_pixel.allFinite() && std::isfinite(c.depth_m) &&
-                c.depth_m > 0.0,
-            "calibrateDedvs: a correspondence is not finite or has depth <= 0");
+namespace {
+
+// Eq. 8.4 parameters as Ceres blocks: edvs_from_depth (rotation vector, translation) and the
+// eDVS intrinsics (f, cx, cy, kappa1, kappa2).
+struct CalibrationParameters {
+  double rotation[3];
+  double translation[3];
+  double intrinsics[5];
+
+  // Initial values (eq. 8.6) from the configuration.
+  explicit CalibrationParameters(const DedvsCalibrationConfig& config) {
+    const Eigen::Isometry3d initial = config.initial_depth_from_edvs.inverse();
+    const Eigen::AngleAxisd initial_rotation(initial.linear());
+    const Eigen::Vector3d rotation_vector = initial_rotation.angle() * initial_rotation.axis();
+    const CameraModel& edvs = config.initial_edvs;
+    const double values[11] = {rotation_vector.x(),
+                               rotation_vector.y(),
+                               rotation_vector.z(),
+                               initial.translation().x(),
+                               initial.translation().y(),
+                               initial.translation().z(),
+                               edvs.focal_px,
+                               edvs.principal_point.x(),
+                               edvs.principal_point.y(),
+                               edvs.kappa1,
+                               edvs.kappa2};
+    std::copy(values, values + 3, rotation);
+    std::copy(values + 3, values + 6, translation);
+    std::copy(values + 6, values + 11, intrinsics);
   }
 
-  // Eq. 8.4 parameters: edvs_from_depth and the eDVS intrinsics, initial values eq. 8.6.
-  const Eigen::Isometry3d initial = config.initial_depth_from_edvs.inverse();
-  const Eigen::AngleAxisd initial_rotation(initial.linear());
-  const Eigen::Vector3d rotation_vector = initial_rotation.angle() * initial_rotation.axis();
-  double rotation[3] = {rotation_vector.x(), rotation_vector.y(), rotation_vector.z()};
-  double translation[3] = {initial.translation().x(), initial.translation().y(),
-                           initial.translation().z()};
-  double intrinsics[5] = {config.initial_edvs.focal_px, config.initial_edvs.principal_point.x(),
-                          config.initial_edvs.principal_point.y(), config.initial_edvs.kappa1,
-                          config.initial_edvs.kappa2};
-
-  std::vector<ReprojectionResidual> residuals;
-  residuals.reserve(correspondences.size());
-  for (const LedCorrespondence& c : correspondences) {
-    residuals.push_back({depthPoint(base.depth, c.depth_pixel, c.depth_m), c.edvs_pixel});
-  }
-
-  DedvsCalibrationResult result;
-  bool converged = true;
-  auto residualOf = [&](const ReprojectionResidual& residual) {
+  // Reprojection error [px] of one correspondence (infinite if it does not project).
+  double error(const ReprojectionResidual& residual) const {
     double r[2] = {0.0, 0.0};
     return residual(rotation, translation, intrinsics, r) ? std::hypot(r[0], r[1])
                                                           : std::numeric_limits<double>::infinity();
-  };
-  std::vector<bool> used(residuals.size(), true);
-  double inlier_threshold = config.inlier_threshold_px;
-  for (int stage = 0; stage < 3; ++stage) {
-    if (stage == 2) {
-      // Trim: drop correspondences beyond outlier_sigmas robust standard deviations (1.4826 x
-      // the median residual) and solve once more on the rest.
-      if (config.outlier_sigmas <= 0.0) break;
-      std::vector<double> errors;
-      for (const ReprojectionResidual& residual : residuals) errors.push_back(residualOf(residual));
-      std::vector<double> sorted = errors;
-      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-      const double sigma = 1.4826 * sorted[sorted.size() / 2];
-      inlier_threshold = std::min(config.inlier_threshold_px, config.outlier_sigmas * sigma);
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < errors.size(); ++i) {
-        used[i] = errors[i] < inlier_threshold;
-        kept += used[i] ? 1 : 0;
-      }
-      if (kept < config.min_correspondences) {
-        inlier_threshold = config.inlier_threshold_px;
-        break;
-      }
-    }
-    ceres::Problem problem;
-    for (std::size_t i = 0; i < residuals.size(); ++i) {
-      if (!used[i]) continue;
-      const ReprojectionResidual& residual = residuals[i];
-      // The problem takes ownership of the cost and loss functions.
-      std::unique_ptr<ceres::LossFunction> loss;
-      if (stage == 0) {
-        loss = std::make_unique<ceres::HuberLoss>(config.coarse_loss_scale_px);
-      } else {
-        loss = std::make_unique<ceres::CauchyLoss>(config.loss_scale_px);
-      }
-      auto cost = std::make_unique<ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 3, 3, 5>>(
-          std::make_unique<ReprojectionResidual>(residual).release());
-      problem.AddResidualBlock(cost.release(), loss.release(), rotation, translation, intrinsics);
-    }
-    ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_QR;
-    options.minimizer_type = ceres::TRUST_REGION;
-    options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    options.max_num_iterations = config.max_iterations;
-    options.logging_type = ceres::SILENT;
-    options.minimizer_progress_to_stdout = false;
-    options.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
-    result.iterations += static_cast<int>(summary.iterations.size());
-    if (stage >= 1) converged = summary.termination_type == ceres::CONVERGENCE;
-    if (summary.termination_type == ceres::FAILURE) converged = false;
   }
+};
 
-  // Result.
-  const Eigen::Vector3d fitted_rotation(rotation[0], rotation[1], rotation[2]);
+// One Levenberg-Marquardt solve over the used correspondences: Huber loss in stage 0, Cauchy
+// after it.
+ceres::Solver::Summary solveStage(CalibrationParameters& p,
+                                  const std::vector<ReprojectionResidual>& residuals,
+                                  const std::vector<bool>& used, int stage,
+                                  const DedvsCalibrationConfig& config) {
+  ceres::Problem problem;
+  for (std::size_t i = 0; i < residuals.size(); ++i) {
+    if (!used[i]) continue;
+    // The problem takes ownership of the cost and loss functions.
+    std::unique_ptr<ceres::LossFunction> loss;
+    if (stage == 0) {
+      loss = std::make_unique<ceres::HuberLoss>(config.coarse_loss_scale_px);
+    } else {
+      loss = std::make_unique<ceres::CauchyLoss>(config.loss_scale_px);
+    }
+    auto cost = std::make_unique<ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 3, 3, 5>>(
+        std::make_unique<ReprojectionResidual>(residuals[i]).release());
+    problem.AddResidualBlock(cost.release(), loss.release(), p.rotation, p.translation,
+                             p.intrinsics);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.max_num_iterations = config.max_iterations;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  return summary;
+}
+
+// Trim: marks as used the correspondences within outlier_sigmas robust standard deviations
+// (1.4826 x the median residual, capped at inlier_threshold_px) and returns that threshold;
+// nullopt (`used` unchanged or partly set, not to be solved on) if too few would remain.
+std::optional<double> trimOutliers(const CalibrationParameters& p,
+                                   const std::vector<ReprojectionResidual>& residuals,
+                                   const DedvsCalibrationConfig& config, std::vector<bool>& used) {
+  std::vector<double> errors;
+  for (const ReprojectionResidual& residual : residuals) errors.push_back(p.error(residual));
+  std::vector<double> sorted = errors;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double sigma = 1.4826 * sorted[sorted.size() / 2];
+  const double threshold = std::min(config.inlier_threshold_px, config.outlier_sigmas * sigma);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < errors.size(); ++i) {
+    used[i] = errors[i] < threshold;
+    kept += used[i] ? 1 : 0;
+  }
+  if (kept < config.min_correspondences) return std::nullopt;
+  return threshold;
+}
+
+// The fitted sensors, residuals and RMSEs (inliers: error below inlier_threshold) and status.
+void fillResult(const CalibrationParameters& p, const std::vector<ReprojectionResidual>& residuals,
+                const DedvsSensors& base, const DedvsCalibrationConfig& config,
+                double inlier_threshold, bool converged, DedvsCalibrationResult& result) {
+  const Eigen::Vector3d fitted_rotation(p.rotation[0], p.rotation[1], p.rotation[2]);
   Eigen::Isometry3d edvs_from_depth = Eigen::Isometry3d::Identity();
   if (fitted_rotation.norm() > 0.0) {
     edvs_from_depth.linear() =
         Eigen::AngleAxisd(fitted_rotation.norm(), fitted_rotation.normalized()).toRotationMatrix();
   }
-  edvs_from_depth.translation() = Eigen::Vector3d(translation[0], translation[1], translation[2]);
+  edvs_from_depth.translation() =
+      Eigen::Vector3d(p.translation[0], p.translation[1], p.translation[2]);
   result.sensors = base;
   result.sensors.depth_from_edvs = edvs_from_depth.inverse();
   CameraModel& edvs = result.sensors.edvs;
   edvs = config.initial_edvs;
   edvs.width = base.edvs.width;
   edvs.height = base.edvs.height;
-  edvs.focal_px = intrinsics[0];
-  edvs.principal_point = Eigen::Vector2d(intrinsics[1], intrinsics[2]);
-  edvs.kappa1 = intrinsics[3];
-  edvs.kappa2 = intrinsics[4];
+  edvs.focal_px = p.intrinsics[0];
+  edvs.principal_point = Eigen::Vector2d(p.intrinsics[1], p.intrinsics[2]);
+  edvs.kappa1 = p.intrinsics[3];
+  edvs.kappa2 = p.intrinsics[4];
 
   double sum_all = 0.0, sum_inliers = 0.0;
   for (const ReprojectionResidual& residual : residuals) {
-    const double error = residualOf(residual);
+    const double error = p.error(residual);
     result.residuals_px.push_back(error);
     sum_all += error * error;
     if (error < inlier_threshold) {
@@ -639,6 +681,49 @@ DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& corr
   } else if (!(result.rmse_px <= config.max_rmse_px)) {
     result.status = CalibrationStatus::kHighError;
   }
+}
+
+}  // namespace
+
+DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& correspondences,
+                                      const DedvsSensors& base,
+                                      const DedvsCalibrationConfig& config) {
+  config.validate();
+  base.depth.validate();
+  require(correspondences.size() >= config.min_correspondences,
+          "calibrateDedvs: " + std::to_string(correspondences.size()) +
+              " correspondences, fewer than min_correspondences = " +
+              std::to_string(config.min_correspondences));
+  for (const LedCorrespondence& c : correspondences) {
+    require(c.depth_pixel.allFinite() && c.edvs_pixel.allFinite() && std::isfinite(c.depth_m) &&
+                c.depth_m > 0.0,
+            "calibrateDedvs: a correspondence is not finite or has depth <= 0");
+  }
+  CalibrationParameters parameters(config);
+  std::vector<ReprojectionResidual> residuals;
+  residuals.reserve(correspondences.size());
+  for (const LedCorrespondence& c : correspondences) {
+    residuals.push_back({depthPoint(base.depth, c.depth_pixel, c.depth_m), c.edvs_pixel});
+  }
+
+  // Three stages: coarse (Huber), fine (Cauchy), fine again on the trimmed correspondences.
+  DedvsCalibrationResult result;
+  bool converged = true;
+  std::vector<bool> used(residuals.size(), true);
+  double inlier_threshold = config.inlier_threshold_px;
+  for (int stage = 0; stage < 3; ++stage) {
+    if (stage == 2) {
+      if (config.outlier_sigmas <= 0.0) break;
+      const std::optional<double> trimmed = trimOutliers(parameters, residuals, config, used);
+      if (!trimmed) break;
+      inlier_threshold = *trimmed;
+    }
+    const ceres::Solver::Summary summary = solveStage(parameters, residuals, used, stage, config);
+    result.iterations += static_cast<int>(summary.iterations.size());
+    if (stage >= 1) converged = summary.termination_type == ceres::CONVERGENCE;
+    if (summary.termination_type == ceres::FAILURE) converged = false;
+  }
+  fillResult(parameters, residuals, base, config, inlier_threshold, converged, result);
   return result;
 }
 

@@ -137,6 +137,185 @@ void addBox(Scene& scene, const Eigen::Vector3d& min, const Eigen::Vector3d& max
                texture, metres_per_texel, colour, ex);
 }
 
+namespace {
+
+struct Footprint {
+  Eigen::Vector2d min, max;
+};
+
+// Whether f comes closer than `gap` metres to any of `others`.
+bool clashes(const Footprint& f, const std::vector<Footprint>& others, double gap) {
+  for (const Footprint& o : others) {
+    if (f.min.x() < o.max.x() + gap && o.min.x() < f.max.x() + gap && f.min.y() < o.max.y() + gap &&
+        o.min.y() < f.max.y() + gap) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// Where the optical axes meet the table height at 0.3-3 m from the camera: median x and y
+// (the centre of the path's box if they never do).
+Eigen::Vector2d lookedAtPoint(const Trajectory& trajectory, double height,
+                              const Eigen::Vector2d& fallback) {
+  std::vector<double> xs, ys;
+  for (std::size_t i = 0; i < trajectory.size();
+       i += std::max<std::size_t>(1, trajectory.size() / 400)) {
+    const Eigen::Vector3d axis = trajectory[i].orientation.normalized() * Eigen::Vector3d::UnitZ();
+    if (axis.z() > -0.2) continue;
+    const double s = (height - trajectory[i].position.z()) / axis.z();
+    if (s < 0.3 || s > 3.0) continue;
+    const Eigen::Vector3d hit = trajectory[i].position + s * axis;
+    xs.push_back(hit.x());
+    ys.push_back(hit.y());
+  }
+  if (xs.empty()) return fallback;
+  std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
+  std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+  return {xs[xs.size() / 2], ys[ys.size() / 2]};
+}
+
+// makeRoomScene in its steps. The order of the texture() calls and of the random draws is
+// part of the scene a seed gives.
+class RoomBuilder {
+ public:
+  RoomBuilder(const Eigen::Vector3d& room_min, const Eigen::Vector3d& room_max,
+              const RoomSceneConfig& config)
+      : config_(config),
+        room_min_(room_min),
+        room_max_(room_max),
+        room_size_(room_max - room_min),
+        mpt_(config.metres_per_texel),
+        texture_seed_(config.seed * 1000),
+        rng_(config.seed) {
+    scene_.background_intensity = 0.3;
+  }
+
+  // Floor, ceiling, four walls; normals point into the room.
+  void addShell() {
+    const Eigen::Vector3d ex = Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d ey = Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3f wall_colour(0.95f, 0.92f, 0.85f);
+    const Eigen::Vector3d& lo = room_min_;
+    const Eigen::Vector3d& size = room_size_;
+    addRectangle(scene_, lo, ex, ey, size.x(), size.y(), texture(1024, 0.35, 1.0), mpt_,
+                 Eigen::Vector3f(0.75f, 0.7f, 0.65f), ez);
+    addRectangle(scene_, Eigen::Vector3d(lo.x(), lo.y(), room_max_.z()), ey, ex, size.y(), size.x(),
+                 texture(512, 0.7, 0.4), 2.0 * mpt_, Eigen::Vector3f::Ones(), -ez);
+    addRectangle(scene_, lo, ez, ey, size.z(), size.y(), texture(1024, 0.6, 1.0), mpt_, wall_colour,
+                 ex);
+    addRectangle(scene_, Eigen::Vector3d(room_max_.x(), lo.y(), 0.0), ey, ez, size.y(), size.z(),
+                 texture(1024, 0.6, 1.0), mpt_, wall_colour, -ex);
+    addRectangle(scene_, lo, ex, ez, size.x(), size.z(), texture(1024, 0.55, 1.0), mpt_,
+                 Eigen::Vector3f(0.85f, 0.9f, 0.95f), ey);
+    addRectangle(scene_, Eigen::Vector3d(lo.x(), room_max_.y(), 0.0), ez, ex, size.z(), size.x(),
+                 texture(1024, 0.55, 1.0), mpt_, Eigen::Vector3f(0.85f, 0.9f, 0.95f), -ey);
+  }
+
+  // Shelf against the +y wall, centred in x.
+  void addShelf() {
+    const double width = std::min(1.2, 0.5 * room_size_.x());
+    const Eigen::Vector3d min(room_min_.x() + 0.5 * (room_size_.x() - width), room_max_.y() - 0.35,
+                              0.0);
+    const Eigen::Vector3d max(min.x() + width, room_max_.y() - 0.01, 1.8);
+    addBox(scene_, min, max, texture(256, 0.5, 1.2), mpt_, Eigen::Vector3f(0.6f, 0.45f, 0.3f));
+    occupied_.push_back({min.head<2>(), max.head<2>()});
+  }
+
+  // A 1.6 x 0.8 m table where the camera looks, kept off the walls.
+  void addTable(const Eigen::Vector2d& looked_at) {
+    const Eigen::Vector2d half(0.8, 0.4);
+    const Eigen::Vector2d centre =
+        looked_at.cwiseMax(room_min_.head<2>() + half + Eigen::Vector2d(0.3, 0.3))
+            .cwiseMin(room_max_.head<2>() - half - Eigen::Vector2d(0.5, 0.5));
+    table_ = {centre - half, centre + half};
+    const cv::Mat top = texture(256, 0.55, 0.6);
+    addBox(scene_, Eigen::Vector3d(table_.min.x(), table_.min.y(), kTableHeight - 0.03),
+           Eigen::Vector3d(table_.max.x(), table_.max.y(), kTableHeight), top, mpt_,
+           Eigen::Vector3f(0.8f, 0.6f, 0.4f));
+    const cv::Mat leg = texture(64, 0.3, 0.5);
+    for (int i = 0; i < 4; ++i) {
+      const double x = (i & 1) ? table_.max.x() - 0.08 : table_.min.x() + 0.03;
+      const double y = (i & 2) ? table_.max.y() - 0.08 : table_.min.y() + 0.03;
+      addBox(scene_, Eigen::Vector3d(x, y, 0.0),
+             Eigen::Vector3d(x + 0.05, y + 0.05, kTableHeight - 0.03), leg, mpt_,
+             Eigen::Vector3f(0.4f, 0.4f, 0.4f));
+    }
+    occupied_.push_back(table_);
+  }
+
+  // Boxes: every second one on the table (if any), the others on the floor; each placed at the
+  // first of 100 random spots where it clashes with nothing.
+  void addBoxes() {
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (int i = 0; i < config_.box_count; ++i) {
+      const bool table_box = config_.with_table && (i % 2 == 0);
+      const Eigen::Vector3f colour(static_cast<float>(0.5 + 0.5 * uniform(rng_)),
+                                   static_cast<float>(0.5 + 0.5 * uniform(rng_)),
+                                   static_cast<float>(0.5 + 0.5 * uniform(rng_)));
+      const cv::Mat box_texture =
+          texture(256, 0.35 + 0.35 * uniform(rng_), 1.0 + 0.4 * uniform(rng_));
+      for (int attempt = 0; attempt < 100; ++attempt) {
+        Eigen::Vector3d size;
+        Eigen::Vector2d lo_xy, hi_xy;
+        double base = 0.0;
+        if (table_box) {
+          size = Eigen::Vector3d(0.1 + 0.25 * uniform(rng_), 0.1 + 0.2 * uniform(rng_),
+                                 0.08 + 0.25 * uniform(rng_));
+          lo_xy = table_.min + Eigen::Vector2d(0.05, 0.05);
+          hi_xy = table_.max - Eigen::Vector2d(0.05, 0.05) - size.head<2>();
+          base = kTableHeight;
+        } else {
+          size = Eigen::Vector3d(0.25 + 0.4 * uniform(rng_), 0.25 + 0.4 * uniform(rng_),
+                                 0.2 + 0.5 * uniform(rng_));
+          lo_xy = room_min_.head<2>() + Eigen::Vector2d(0.2, 0.2);
+          hi_xy = room_max_.head<2>() - Eigen::Vector2d(0.2, 0.2) - size.head<2>();
+        }
+        if ((hi_xy - lo_xy).minCoeff() <= 0.0) break;
+        const Eigen::Vector2d corner(lo_xy.x() + uniform(rng_) * (hi_xy.x() - lo_xy.x()),
+                                     lo_xy.y() + uniform(rng_) * (hi_xy.y() - lo_xy.y()));
+        const Footprint footprint{corner, corner + size.head<2>()};
+        std::vector<Footprint>& group = table_box ? on_table_ : occupied_;
+        if (clashes(footprint, group, 0.05) || (!table_box && clashes(footprint, occupied_, 0.1))) {
+          continue;
+        }
+        group.push_back(footprint);
+        addBox(scene_, Eigen::Vector3d(corner.x(), corner.y(), base),
+               Eigen::Vector3d(corner.x() + size.x(), corner.y() + size.y(), base + size.z()),
+               box_texture, mpt_, colour);
+        break;
+      }
+    }
+  }
+
+  Scene take() { return std::move(scene_); }
+
+  static constexpr double kTableHeight = 0.75;  // [m]
+
+ private:
+  cv::Mat texture(int size, double mean, double contrast_scale) {
+    DeadLeavesConfig leaves;
+    leaves.size_px = size;
+    leaves.mean_intensity = mean;
+    leaves.contrast = std::min(2.0, config_.texture_contrast * contrast_scale);
+    leaves.max_radius_px = size / 6.0;
+    leaves.seed = ++texture_seed_;
+    return makeDeadLeavesTexture(leaves);
+  }
+
+  const RoomSceneConfig& config_;
+  const Eigen::Vector3d room_min_, room_max_, room_size_;
+  const double mpt_;
+  std::uint64_t texture_seed_;
+  std::mt19937_64 rng_;
+  Scene scene_;
+  std::vector<Footprint> occupied_, on_table_;
+  Footprint table_{};
+};
+
+}  // namespace
+
 Scene makeRoomScene(const Trajectory& trajectory, const RoomSceneConfig& config) {
   config.validate();
   require(!trajectory.empty(), "makeRoomScene: the trajectory is empty");
@@ -148,154 +327,16 @@ Scene makeRoomScene(const Trajectory& trajectory, const RoomSceneConfig& config)
     hi = hi.cwiseMax(pose.position);
   }
   const double margin = config.wall_margin_m;
-  const Eigen::Vector3d room_min(lo.x() - margin, lo.y() - margin, 0.0);
-  const Eigen::Vector3d room_max(hi.x() + margin, hi.y() + margin, config.ceiling_height_m);
-  const Eigen::Vector3d room_size = room_max - room_min;
-  const double mpt = config.metres_per_texel;
-  std::uint64_t texture_seed = config.seed * 1000;
-  auto texture = [&](int size, double mean, double contrast_scale) {
-    DeadLeavesConfig leaves;
-    leaves.size_px = size;
-    leaves.mean_intensity = mean;
-    leaves.contrast = std::min(2.0, config.texture_contrast * contrast_scale);
-    leaves.max_radius_px = size / 6.0;
-    leaves.seed = ++texture_seed;
-    return makeDeadLeavesTexture(leaves);
-  };
-
-  Scene scene;
-  scene.background_intensity = 0.3;
-  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX();
-  const Eigen::Vector3d ey = Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3f wall_colour(0.95f, 0.92f, 0.85f);
-  // Floor, ceiling, four walls; normals point into the room.
-  addRectangle(scene, room_min, ex, ey, room_size.x(), room_size.y(), texture(1024, 0.35, 1.0), mpt,
-               Eigen::Vector3f(0.75f, 0.7f, 0.65f), ez);
-  addRectangle(scene, Eigen::Vector3d(room_min.x(), room_min.y(), room_max.z()), ey, ex,
-               room_size.y(), room_size.x(), texture(512, 0.7, 0.4), 2.0 * mpt,
-               Eigen::Vector3f::Ones(), -ez);
-  addRectangle(scene, room_min, ez, ey, room_size.z(), room_size.y(), texture(1024, 0.6, 1.0), mpt,
-               wall_colour, ex);
-  addRectangle(scene, Eigen::Vector3d(room_max.x(), room_min.y(), 0.0), ey, ez, room_size.y(),
-               room_size.z(), texture(1024, 0.6, 1.0), mpt, wall_colour, -ex);
-  addRectangle(scene, room_min, ex, ez, room_size.x(), room_size.z(), texture(1024, 0.55, 1.0), mpt,
-               Eigen::Vector3f(0.85f, 0.9f, 0.95f), ey);
-  addRectangle(scene, Eigen::Vector3d(room_min.x(), room_max.y(), 0.0), ez, ex, room_size.z(),
-               room_size.x(), texture(1024, 0.55, 1.0), mpt, Eigen::Vector3f(0.85f, 0.9f, 0.95f),
-               -ey);
-
-  std::mt19937_64 rng(config.seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  struct Footprint {
-    Eigen::Vector2d min, max;
-  };
-  std::vector<Footprint> occupied;
-  auto overlaps = [&](const Footprint& f) {
-    for (const Footprint& o : occupied) {
-      if (f.min.x() < o.max.x() + 0.1 && o.min.x() < f.max.x() + 0.1 &&
-          f.min.y() < o.max.y() + 0.1 && o.min.y() < f.max.y() + 0.1) {
-        return true;
-      }
-    }
-    return false;
-  };
-
-  // Shelf against the +y wall, centred in x.
-  {
-    const double width = std::min(1.2, 0.5 * room_size.x());
-    const Eigen::Vector3d min(room_min.x() + 0.5 * (room_size.x() - width), room_max.y() - 0.35,
-                              0.0);
-    const Eigen::Vector3d max(min.x() + width, room_max.y() - 0.01, 1.8);
-    addBox(scene, min, max, texture(256, 0.5, 1.2), mpt, Eigen::Vector3f(0.6f, 0.45f, 0.3f));
-    occupied.push_back({min.head<2>(), max.head<2>()});
-  }
-
-  const double table_height = 0.75;
-  Footprint table{};
+  RoomBuilder room(Eigen::Vector3d(lo.x() - margin, lo.y() - margin, 0.0),
+                   Eigen::Vector3d(hi.x() + margin, hi.y() + margin, config.ceiling_height_m),
+                   config);
+  room.addShell();
+  room.addShelf();
   if (config.with_table) {
-    // Where the optical axes meet the table height at 0.3-3 m: median x and y.
-    std::vector<double> xs, ys;
-    for (std::size_t i = 0; i < trajectory.size();
-         i += std::max<std::size_t>(1, trajectory.size() / 400)) {
-      const Eigen::Vector3d axis = trajectory[i].orientation.normalized() * ez;
-      if (axis.z() > -0.2) continue;
-      const double s = (table_height - trajectory[i].position.z()) / axis.z();
-      if (s < 0.3 || s > 3.0) continue;
-      const Eigen::Vector3d hit = trajectory[i].position + s * axis;
-      xs.push_back(hit.x());
-      ys.push_back(hit.y());
-    }
-    Eigen::Vector2d centre = 0.5 * (lo + hi).head<2>();
-    if (!xs.empty()) {
-      std::nth_element(xs.begin(), xs.begin() + xs.size() / 2, xs.end());
-      std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
-      centre = Eigen::Vector2d(xs[xs.size() / 2], ys[ys.size() / 2]);
-    }
-    const Eigen::Vector2d half(0.8, 0.4);
-    centre = centre.cwiseMax(room_min.head<2>() + half + Eigen::Vector2d(0.3, 0.3))
-                 .cwiseMin(room_max.head<2>() - half - Eigen::Vector2d(0.5, 0.5));
-    table = {centre - half, centre + half};
-    const cv::Mat top = texture(256, 0.55, 0.6);
-    addBox(scene, Eigen::Vector3d(table.min.x(), table.min.y(), table_height - 0.03),
-           Eigen::Vector3d(table.max.x(), table.max.y(), table_height), top, mpt,
-           Eigen::Vector3f(0.8f, 0.6f, 0.4f));
-    const cv::Mat leg = texture(64, 0.3, 0.5);
-    for (int i = 0; i < 4; ++i) {
-      const double x = (i & 1) ? table.max.x() - 0.08 : table.min.x() + 0.03;
-      const double y = (i & 2) ? table.max.y() - 0.08 : table.min.y() + 0.03;
-      addBox(scene, Eigen::Vector3d(x, y, 0.0),
-             Eigen::Vector3d(x + 0.05, y + 0.05, table_height - 0.03), leg, mpt,
-             Eigen::Vector3f(0.4f, 0.4f, 0.4f));
-    }
-    occupied.push_back(table);
+    room.addTable(lookedAtPoint(trajectory, RoomBuilder::kTableHeight, 0.5 * (lo + hi).head<2>()));
   }
-
-  // Boxes: every second one on the table (if any), the others on the floor.
-  std::vector<Footprint> on_table;
-  for (int i = 0; i < config.box_count; ++i) {
-    const bool table_box = config.with_table && (i % 2 == 0);
-    const Eigen::Vector3f colour(static_cast<float>(0.5 + 0.5 * uniform(rng)),
-                                 static_cast<float>(0.5 + 0.5 * uniform(rng)),
-                                 static_cast<float>(0.5 + 0.5 * uniform(rng)));
-    const cv::Mat box_texture = texture(256, 0.35 + 0.35 * uniform(rng), 1.0 + 0.4 * uniform(rng));
-    for (int attempt = 0; attempt < 100; ++attempt) {
-      Eigen::Vector3d size;
-      Eigen::Vector2d lo_xy, hi_xy;
-      double base = 0.0;
-      if (table_box) {
-        size = Eigen::Vector3d(0.1 + 0.25 * uniform(rng), 0.1 + 0.2 * uniform(rng),
-                               0.08 + 0.25 * uniform(rng));
-        lo_xy = table.min + Eigen::Vector2d(0.05, 0.05);
-        hi_xy = table.max - Eigen::Vector2d(0.05, 0.05) - size.head<2>();
-        base = table_height;
-      } else {
-        size = Eigen::Vector3d(0.25 + 0.4 * uniform(rng), 0.25 + 0.4 * uniform(rng),
-                               0.2 + 0.5 * uniform(rng));
-        lo_xy = room_min.head<2>() + Eigen::Vector2d(0.2, 0.2);
-        hi_xy = room_max.head<2>() - Eigen::Vector2d(0.2, 0.2) - size.head<2>();
-      }
-      if ((hi_xy - lo_xy).minCoeff() <= 0.0) break;
-      const Eigen::Vector2d corner(lo_xy.x() + uniform(rng) * (hi_xy.x() - lo_xy.x()),
-                                   lo_xy.y() + uniform(rng) * (hi_xy.y() - lo_xy.y()));
-      const Footprint footprint{corner, corner + size.head<2>()};
-      std::vector<Footprint>& group = table_box ? on_table : occupied;
-      bool clash = false;
-      for (const Footprint& o : group) {
-        if (footprint.min.x() < o.max.x() + 0.05 && o.min.x() < footprint.max.x() + 0.05 &&
-            footprint.min.y() < o.max.y() + 0.05 && o.min.y() < footprint.max.y() + 0.05) {
-          clash = true;
-        }
-      }
-      if (clash || (!table_box && overlaps(footprint))) continue;
-      group.push_back(footprint);
-      addBox(scene, Eigen::Vector3d(corner.x(), corner.y(), base),
-             Eigen::Vector3d(corner.x() + size.x(), corner.y() + size.y(), base + size.z()),
-             box_texture, mpt, colour);
-      break;
-    }
-  }
-  return scene;
+  room.addBoxes();
+  return room.take();
 }
 
 }  // namespace ebslam

@@ -642,6 +642,76 @@ void validateInputs(const Scene& scene, const Trajectory& trajectory, double t_b
   }
 }
 
+// Probe pixels for the step control: corners, edge midpoints and centre.
+std::vector<std::size_t> stepProbes(int width, int height) {
+  std::vector<std::size_t> probes;
+  for (int py : {0, height / 2, height - 1}) {
+    for (int px : {0, width / 2, width - 1}) {
+      probes.push_back(static_cast<std::size_t>(py) * width + px);
+    }
+  }
+  return probes;
+}
+
+// The largest image motion [px] of the probe pixels' surface points under `to_next` (eDVS frame
+// now -> eDVS frame at the next render); 1e9 if one leaves the image model.
+double probeMotionPx(const CameraModel& edvs, const RayGrid& grid, const Hits& hits,
+                     const std::vector<std::size_t>& probes, const Eigen::Isometry3d& to_next) {
+  const int width = edvs.width;
+  double motion_px = 0.0;
+  for (std::size_t i : probes) {
+    const Eigen::Vector3d ray(grid.x[i], grid.y[i], 1.0);
+    const Eigen::Vector2d start(static_cast<double>(i % width), static_cast<double>(i / width));
+    const float z = hits.z[i];
+    // Points without a hit move with the rotation alone (at infinity).
+    const Eigen::Vector3d moved = std::isinf(z) ? Eigen::Vector3d(to_next.linear() * ray)
+                                                : Eigen::Vector3d(to_next * (z * ray));
+    const std::optional<Eigen::Vector2d> end = edvs.project(moved);
+    motion_px = end ? std::max(motion_px, (*end - start).norm()) : 1e9;
+  }
+  return motion_px;
+}
+
+// Ground truth of an event between renders at t0 and t1 [s]: the depth at the nearer render in
+// time when the two renders see different surfaces, else interpolated; the depth edge flag and
+// the 3x3 neighbourhood's depth range from the nearer render.
+TrueDepthEvent annotateEvent(const Event& event, bool is_noise, double t0, double t1,
+                             const Hits& previous, const Hits& current, int width, int height) {
+  const std::size_t i = static_cast<std::size_t>(event.y) * width + event.x;
+  const double fraction = std::clamp((event.t_us * 1e-6 - t0) / (t1 - t0), 0.0, 1.0);
+  const float z0 = previous.z[i];
+  const float z1 = current.z[i];
+  const bool use_first = fraction < 0.5;
+  float depth;
+  if (std::isinf(z0) || std::isinf(z1) || std::abs(z1 - z0) > 0.02f * std::min(z0, z1)) {
+    depth = use_first ? z0 : z1;
+  } else {
+    depth = z0 + static_cast<float>(fraction) * (z1 - z0);
+  }
+  TrueDepthEvent annotated;
+  annotated.event = event;
+  annotated.is_noise = is_noise;
+  annotated.depth_m = std::isinf(depth) ? std::numeric_limits<float>::quiet_NaN() : depth;
+  const std::vector<float>& z_at = use_first ? previous.z : current.z;
+  annotated.at_depth_edge = atDepthEdge(z_at, width, height, i, 0.1f);
+  float z_min = std::numeric_limits<float>::infinity();
+  float z_max = -std::numeric_limits<float>::infinity();
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int nx = event.x + dx, ny = event.y + dy;
+      if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+      const float zn = z_at[static_cast<std::size_t>(ny) * width + nx];
+      if (std::isinf(zn)) continue;
+      z_min = std::min(z_min, zn);
+      z_max = std::max(z_max, zn);
+    }
+  }
+  const bool any = z_min <= z_max;
+  annotated.neighbourhood_min_depth_m = any ? z_min : std::numeric_limits<float>::quiet_NaN();
+  annotated.neighbourhood_max_depth_m = any ? z_max : std::numeric_limits<float>::quiet_NaN();
+  return annotated;
+}
+
 }  // namespace
 
 DedvsSimulator::DedvsSimulator(const DedvsSimulatorConfig& config) : config_(config) {
@@ -735,13 +805,7 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
   double max_step_s = 1.0 / config_.render_rate_hz;
   for (const BlinkingLed& led : leds) max_step_s = std::min(max_step_s, 0.125 / led.frequency_hz);
 
-  // Probe pixels for the step control: corners, edge midpoints and centre.
-  std::vector<std::size_t> probes;
-  for (int py : {0, height / 2, height - 1}) {
-    for (int px : {0, width / 2, width - 1}) {
-      probes.push_back(static_cast<std::size_t>(py) * width + px);
-    }
-  }
+  const std::vector<std::size_t> probes = stepProbes(width, height);
   const RayGrid& grid = session.edvsGrid();
 
   EventVector step_events;
@@ -752,18 +816,8 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
     double t1 = std::min(t0 + max_step_s, t_end_s);
     const Eigen::Isometry3d edvs0 = rig * config_.depth_from_edvs;
     Eigen::Isometry3d next_rig = toIsometry(interpolatePose(rig_trajectory, t1));
-    double motion_px = 0.0;
     const Eigen::Isometry3d to_next = (next_rig * config_.depth_from_edvs).inverse() * edvs0;
-    for (std::size_t i : probes) {
-      const Eigen::Vector3d ray(grid.x[i], grid.y[i], 1.0);
-      const Eigen::Vector2d start(static_cast<double>(i % width), static_cast<double>(i / width));
-      const float z = hits_previous.z[i];
-      // Points without a hit move with the rotation alone (at infinity).
-      const Eigen::Vector3d moved = std::isinf(z) ? Eigen::Vector3d(to_next.linear() * ray)
-                                                  : Eigen::Vector3d(to_next * (z * ray));
-      const std::optional<Eigen::Vector2d> end = edvs.project(moved);
-      motion_px = end ? std::max(motion_px, (*end - start).norm()) : 1e9;
-    }
+    const double motion_px = probeMotionPx(edvs, grid, hits_previous, probes, to_next);
     if (motion_px > config_.max_step_motion_px) {
       const double subdivisions = std::min(std::ceil(motion_px / config_.max_step_motion_px), 1e3);
       t1 = t0 + (t1 - t0) / subdivisions;
@@ -777,45 +831,11 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
     const std::size_t signal = generator.step(intensity, t1, step_events, &noise_flags);
     run.signal_events += signal;
     run.noise_events += step_events.size() - signal;
-    // Ground truth per event: the depth at the nearer render in time when the two renders see
-    // different surfaces, else interpolated.
     batch.clear();
     batch.reserve(step_events.size());
     for (std::size_t e = 0; e < step_events.size(); ++e) {
-      const Event& event = step_events[e];
-      const std::size_t i = static_cast<std::size_t>(event.y) * width + event.x;
-      const double fraction = std::clamp((event.t_us * 1e-6 - t0) / (t1 - t0), 0.0, 1.0);
-      const float z0 = hits_previous.z[i];
-      const float z1 = hits_current.z[i];
-      const bool use_first = fraction < 0.5;
-      float depth;
-      if (std::isinf(z0) || std::isinf(z1) || std::abs(z1 - z0) > 0.02f * std::min(z0, z1)) {
-        depth = use_first ? z0 : z1;
-      } else {
-        depth = z0 + static_cast<float>(fraction) * (z1 - z0);
-      }
-      TrueDepthEvent annotated;
-      annotated.event = event;
-      annotated.is_noise = noise_flags[e] != 0;
-      annotated.depth_m = std::isinf(depth) ? std::numeric_limits<float>::quiet_NaN() : depth;
-      const std::vector<float>& z_at = use_first ? hits_previous.z : hits_current.z;
-      annotated.at_depth_edge = atDepthEdge(z_at, width, height, i, 0.1f);
-      float z_min = std::numeric_limits<float>::infinity();
-      float z_max = -std::numeric_limits<float>::infinity();
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int nx = event.x + dx, ny = event.y + dy;
-          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-          const float zn = z_at[static_cast<std::size_t>(ny) * width + nx];
-          if (std::isinf(zn)) continue;
-          z_min = std::min(z_min, zn);
-          z_max = std::max(z_max, zn);
-        }
-      }
-      const bool any = z_min <= z_max;
-      annotated.neighbourhood_min_depth_m = any ? z_min : std::numeric_limits<float>::quiet_NaN();
-      annotated.neighbourhood_max_depth_m = any ? z_max : std::numeric_limits<float>::quiet_NaN();
-      batch.push_back(annotated);
+      batch.push_back(annotateEvent(step_events[e], noise_flags[e] != 0, t0, t1, hits_previous,
+                                    hits_current, width, height));
     }
     if (event_sink && !batch.empty()) event_sink(batch);
     std::swap(hits_previous, hits_current);

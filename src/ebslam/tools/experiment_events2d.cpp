@@ -214,10 +214,8 @@ std::vector<T> parseList(const std::string& text) {
   return out;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Simulated floor-robot runs: EB-PF and EB-SLAM-2D accuracy and speed"};
+// The command line.
+struct Options {
   std::string data_dir = "../shared/data";
   std::string out_dir = "events2d_runs";
   std::string particles_text = "5,10,25,75";
@@ -238,76 +236,317 @@ int main(int argc, char** argv) {
   bool noise_only = false;
   std::string noise_variants_text = "off,filter,robust,filter+robust";
   std::string trajectory_filter;
-  app.add_option("--data", data_dir, "shared data folder (tum-groundtruth inside)")
+};
+
+void addOptions(CLI::App& app, Options& o) {
+  app.add_option("--data", o.data_dir, "shared data folder (tum-groundtruth inside)")
       ->capture_default_str();
-  app.add_option("--out", out_dir, "output folder")->capture_default_str();
-  app.add_option("--duration", duration_s, "simulate only the first seconds (0 = all)")
+  app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
+  app.add_option("--duration", o.duration_s, "simulate only the first seconds (0 = all)")
       ->capture_default_str();
-  app.add_option("--seeds", seeds, "filter seeds per trajectory")->capture_default_str();
-  app.add_option("--slam-particles", particles_text, "EB-SLAM-2D particle counts")
+  app.add_option("--seeds", o.seeds, "filter seeds per trajectory")->capture_default_str();
+  app.add_option("--slam-particles", o.particles_text, "EB-SLAM-2D particle counts")
       ->capture_default_str();
-  app.add_option("--ebpf-resample", ebpf_resample_text,
+  app.add_option("--ebpf-resample", o.ebpf_resample_text,
                  "EB-PF resampling intervals K (the thesis' default is 100)")
       ->capture_default_str();
-  app.add_option("--failure", failure_m, "aligned position RMSE counted as diverged [m]")
+  app.add_option("--failure", o.failure_m, "aligned position RMSE counted as diverged [m]")
       ->capture_default_str();
-  app.add_option("--g0-ebpf", g0_ebpf, "G0 of EB-PF")->capture_default_str();
-  app.add_option("--g0-slam", g0_slam, "G0 of EB-SLAM-2D")->capture_default_str();
-  app.add_option("--ebpf-latency", latency_s,
+  app.add_option("--g0-ebpf", o.g0_ebpf, "G0 of EB-PF")->capture_default_str();
+  app.add_option("--g0-slam", o.g0_slam, "G0 of EB-SLAM-2D")->capture_default_str();
+  app.add_option("--ebpf-latency", o.latency_s,
                  "EB-PF latency compensation [s] (EventFilterConfig::latency_compensation_s)")
       ->capture_default_str();
-  app.add_option("--g0-sweep-ebpf", g0_sweep_ebpf,
+  app.add_option("--g0-sweep-ebpf", o.g0_sweep_ebpf,
                  "G0 values compared for EB-PF (first K of --ebpf-resample; empty: none)")
       ->capture_default_str();
-  app.add_option("--g0-sweep-slam", g0_sweep_slam,
+  app.add_option("--g0-sweep-slam", o.g0_sweep_slam,
                  "G0 values compared for EB-SLAM-2D at N = 10 (empty: none)")
       ->capture_default_str();
-  app.add_option("-B,--batch", batch, "batch size B")->capture_default_str();
-  app.add_option("--noise-rates", noise_rates_text,
+  app.add_option("-B,--batch", o.batch, "batch size B")->capture_default_str();
+  app.add_option("--noise-rates", o.noise_rates_text,
                  "background-activity rates [Hz per pixel] of the noise runs (empty: none)")
       ->capture_default_str();
-  app.add_option("--noise-seeds", noise_seeds, "filter seeds per noise run")->capture_default_str();
-  app.add_option("--denoise-window-us", denoise.window_us,
+  app.add_option("--noise-seeds", o.noise_seeds, "filter seeds per noise run")
+      ->capture_default_str();
+  app.add_option("--denoise-window-us", o.denoise.window_us,
                  "support window of the background-activity filter [us]")
       ->capture_default_str();
-  app.add_flag("--denoise-refractory", denoise.refractory_filter,
+  app.add_flag("--denoise-refractory", o.denoise.refractory_filter,
                "also the per-pixel refractory filter");
-  app.add_option("--noise-variants", noise_variants_text,
+  app.add_option("--noise-variants", o.noise_variants_text,
                  "variants of the noise runs: off, filter, robust, filter+robust")
       ->capture_default_str();
-  app.add_option("--only", trajectory_filter, "only trajectories whose name contains this");
-  app.add_flag("--noise-only", noise_only,
+  app.add_option("--only", o.trajectory_filter, "only trajectories whose name contains this");
+  app.add_flag("--noise-only", o.noise_only,
                "only the noise runs (the default-noise runs and G0 sweeps are left out)");
-  app.add_option("--denoise-windows", denoise_windows_text,
+  app.add_option("--denoise-windows", o.denoise_windows_text,
                  "support windows [us] scored against the noise labels")
       ->capture_default_str();
+}
+
+// The freiburg2_pioneer_* trajectories of the shared data whose name contains `filter`, sorted.
+std::vector<fs::path> pioneerTrajectories(const std::string& data_dir, const std::string& filter) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(fs::path(data_dir) / "tum-groundtruth")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find("freiburg2_pioneer_") != std::string::npos &&
+        name.find(filter) != std::string::npos) {
+      files.push_back(entry.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
+  return files;
+}
+
+// EB-PF's sensor model cached on a 1 cm grid (2 x 2 means of the 5 mm one, which keeps cell
+// centres): a quarter of the memory, so the per-event lookups stay in cache.
+GridMap2f coarseLikelihood(const CeilingMap& map, const CeilingCamera& camera) {
+  const GridMap2f fine = makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m,
+                                               EbpfConfig{}.gamma * camera.wTrig());
+  GridMap2f likelihood(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m, fine.origin_x_m,
+                       fine.origin_y_m);
+  for (int r = 0; r < likelihood.height; ++r) {
+    for (int c = 0; c < likelihood.width; ++c) {
+      likelihood.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
+                                     fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
+    }
+  }
+  return likelihood;
+}
+
+// Runs EB-PF and EB-SLAM-2D on one simulated trajectory and writes a CSV line per run.
+class TrajectoryRuns {
+ public:
+  TrajectoryRuns(const Options& options, const std::string& name, const fs::path& dir,
+                 const Simulated& run, const CeilingCamera& camera)
+      : options_(options),
+        name_(name),
+        dir_(dir),
+        run_(run),
+        camera_(camera),
+        run_duration_(run.ground_truth.back().t_s - run.ground_truth.front().t_s),
+        start_(tools::toPose2(run.ground_truth.front())),
+        likelihood_(coarseLikelihood(run.map, camera)) {
+    eval_.estimate_time_offset = false;  // simulated events share the ground truth's clock
+  }
+
+  double duration() const { return run_duration_; }
+
+  void ebpf(const std::string& method, int k, double g0, int seed, bool save,
+            const EventVector& events, std::ostream& out, const std::string& suffix) const {
+    EbpfConfig config;
+    config.filter.resample_every = k;
+    config.filter.g0 = g0;
+    config.filter.batch_size = options_.batch;
+    config.filter.latency_compensation_s = options_.latency_s;
+    config.filter.seed = static_cast<std::uint64_t>(seed);
+    EventParticleFilter filter(config, camera_, likelihood_, start_);
+    // As tools::runFilter, recording the compensated and the raw estimate.
+    Trajectory estimate, raw;
+    const auto t_start = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < events.size(); i += 100) {
+      const std::size_t n = std::min<std::size_t>(100, events.size() - i);
+      filter.process(events.data() + i, n);
+      const double t = static_cast<double>(events[i + n - 1].t_us) * 1e-6;
+      if (!estimate.empty() && t <= estimate.back().t_s) continue;
+      estimate.push_back(tools::toStampedPose(t, filter.estimate()));
+      raw.push_back(tools::toStampedPose(t, filter.rawEstimate()));
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    if (save) {
+      writeTumTrajectory(
+          (dir_ / ("ebpf_K" + std::to_string(k) + "_s" + std::to_string(seed) + ".tum")).string(),
+          estimate);
+    }
+    const Trajectory& truth = run_.ground_truth;
+    const auto [pos, rot] = directRmse(estimate, truth);
+    const double pos_raw = directRmse(raw, truth).first;
+    const double offset = bestTimeOffset(raw, truth);
+    const bool failed = !(pos <= options_.failure_m);
+    const double smoothed = directRmse(meanFiltered(estimate, 10), truth).first;
+    out << name_ << ',' << method << ',' << config.filter.num_particles << ',' << options_.batch
+        << ',' << k << ',' << g0 << ',' << options_.latency_s << ',' << seed << ',' << events.size()
+        << ',' << run_duration_ << ',' << pos << ',' << rot << ',' << failed << ','
+        << events.size() / seconds << ',' << smoothed << ',' << pos_raw << ',' << offset << suffix
+        << '\n';
+    out.flush();
+    std::printf(
+        "  %-8s N=%3d K=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg (raw %.2f cm, best "
+        "offset %+.0f ms), %.0f events/s\n",
+        method.c_str(), config.filter.num_particles, k, g0, seed, pos * 100, rot, pos_raw * 100,
+        offset * 1e3, events.size() / seconds);
+    std::fflush(stdout);
+  }
+
+  void slam(const std::string& method, int n, double g0, int seed, bool save,
+            const EventVector& events, std::ostream& out, const std::string& suffix,
+            bool noise_aware = false) const {
+    Ebslam2dConfig config;
+    config.noise_aware_diffusion = noise_aware;
+    config.filter.g0 = g0;
+    config.filter.batch_size = options_.batch;
+    config.filter.num_particles = n;
+    config.filter.seed = static_cast<std::uint64_t>(seed);
+    EventSlam2d slam(config, camera_, start_);
+    Trajectory estimate;
+    const double seconds = tools::runFilter(slam, events, 100, estimate);
+    const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
+    if (save) {
+      writeTumTrajectory((dir_ / (stem + ".tum")).string(), estimate);
+      if (seed == 1) cv::imwrite((dir_ / (stem + "_map.png")).string(), mapToImage(slam.map()));
+    }
+    const TrajectoryEvaluation e = evaluateTrajectory(estimate, run_.ground_truth, eval_);
+    const bool failed = !(e.position_rmse_m <= options_.failure_m);
+    out << name_ << ',' << method << ',' << n << ',' << options_.batch << ','
+        << config.filter.resample_every << ',' << g0 << ",0," << seed << ',' << events.size() << ','
+        << run_duration_ << ',' << e.position_rmse_m << ',' << e.rotation_rmse_deg << ',' << failed
+        << ',' << events.size() / seconds << ",,," << suffix << '\n';
+    out.flush();
+    std::printf("  %-8s N=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n",
+                method.c_str(), n, g0, seed, e.position_rmse_m * 100, e.rotation_rmse_deg,
+                failed ? " (diverged)" : "", events.size() / seconds);
+    std::fflush(stdout);
+  }
+
+ private:
+  const Options& options_;
+  const std::string name_;
+  const fs::path dir_;
+  const Simulated& run_;
+  const CeilingCamera& camera_;
+  const double run_duration_;
+  const Pose2 start_;
+  const GridMap2f likelihood_;
+  TrajectoryEvaluationConfig eval_;
+};
+
+// The runs at the simulator's default noise: EB-PF per K, EB-SLAM-2D per N, and the G0 sweeps
+// (over every trajectory and seed: the defaults are chosen on the whole set).
+void defaultNoiseRuns(const Options& o, const TrajectoryRuns& runs, const EventVector& events,
+                      std::ostream& csv) {
+  const std::vector<int> ebpf_k = parseList<int>(o.ebpf_resample_text);
+  for (int k : ebpf_k) {
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+      runs.ebpf("ebpf", k, o.g0_ebpf, seed, true, events, csv, "");
+    }
+  }
+  for (int n : parseList<int>(o.particles_text)) {
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+      runs.slam("ebslam2d", n, o.g0_slam, seed, true, events, csv, "");
+    }
+  }
+  for (double g0 : parseList<double>(o.g0_sweep_ebpf)) {
+    if (ebpf_k.empty() || g0 == o.g0_ebpf) continue;  // the main runs above
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+      runs.ebpf("ebpf_g0", ebpf_k[0], g0, seed, false, events, csv, "");
+    }
+  }
+  for (double g0 : parseList<double>(o.g0_sweep_slam)) {
+    if (g0 == o.g0_slam) continue;
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+      runs.slam("ebslam2d_g0", 10, g0, seed, false, events, csv, "");
+    }
+  }
+}
+
+// The background-activity filter scored against the noise labels, per support window, support
+// and polarity rule: a line of denoise.csv each.
+void scoreDenoiser(const Options& o, const std::string& name, double rate, const Simulated& noisy,
+                   std::ostream& denoise_csv) {
+  for (int window : parseList<int>(o.denoise_windows_text)) {
+    for (const auto& [support, polarity] :
+         {std::pair<int, bool>{1, false}, {1, true}, {2, false}, {2, true}, {3, true}, {4, true}}) {
+      BackgroundActivityFilterConfig c = o.denoise;
+      c.window_us = window;
+      c.min_support = support;
+      c.polarity_match = polarity;
+      const auto t_start = std::chrono::steady_clock::now();
+      const DenoisingScore d =
+          scoreDenoising(c, SensorSize{128, 128}, noisy.events, noisy.noise_labels);
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      denoise_csv << name << ',' << rate << ',' << window << ',' << support << ',' << polarity
+                  << ',' << c.refractory_filter << ',' << d.signal << ',' << d.signal_kept << ','
+                  << d.noise << ',' << d.noise_removed << ',' << noisy.events.size() / seconds
+                  << '\n';
+      std::printf(
+          "  noise %g Hz, window %d us, support %d%s: signal kept %.1f %%, noise removed "
+          "%.1f %%\n",
+          rate, window, support, polarity ? " same polarity" : "", 100.0 * d.signalKeptFraction(),
+          100.0 * d.noiseRemovedFraction());
+    }
+  }
+  denoise_csv.flush();
+}
+
+// Noise runs: the trajectory simulated again at background-activity rate `rate`, the denoiser
+// scored, then EB-PF (first K) and EB-SLAM-2D (N = 10) per seed and variant.
+void noiseRuns(const Options& o, const fs::path& mocap, const fs::path& dir,
+               const std::string& name, double rate, const TrajectoryRuns& runs,
+               std::ostream& noise_csv, std::ostream& denoise_csv) {
+  char rate_text[32];
+  std::snprintf(rate_text, sizeof rate_text, "%g", rate);
+  const Simulated noisy =
+      simulateRun(mocap, dir / ("noise" + std::string(rate_text)), o.duration_s, 1, rate);
+  if (noisy.noise_labels.size() != noisy.events.size()) {
+    throw std::runtime_error("no noise labels for " + (dir / rate_text).string() +
+                             "; delete the folder to simulate it again");
+  }
+  scoreDenoiser(o, name, rate, noisy, denoise_csv);
+  BackgroundActivityFilter filter(o.denoise, SensorSize{128, 128});
+  EventVector filtered;
+  filter.filter(noisy.events, filtered);
+  std::printf("  noise %g Hz: %zu events, %zu after the filter\n", rate, noisy.events.size(),
+              filtered.size());
+  std::fflush(stdout);
+  const std::vector<int> ebpf_k = parseList<int>(o.ebpf_resample_text);
+  // Seeds outermost: an interrupted sweep has every variant with the same seeds.
+  const std::vector<std::string> variants = parseList<std::string>(o.noise_variants_text);
+  for (int seed = 1; seed <= o.noise_seeds; ++seed) {
+    for (const std::string& variant : variants) {
+      // off: raw events, thesis model; filter: the background-activity filter first;
+      // robust: EB-SLAM-2D's noise-aware diffusion (EB-PF runs only without it).
+      const bool use_filter = variant == "filter" || variant == "filter+robust";
+      const bool robust = variant == "robust" || variant == "filter+robust";
+      if (!use_filter && !robust && variant != "off") {
+        throw std::invalid_argument("unknown noise variant '" + variant + "'");
+      }
+      const EventVector& events = use_filter ? filtered : noisy.events;
+      const std::string suffix = "," + std::string(rate_text) + "," + variant;
+      if (!ebpf_k.empty() && !robust) {
+        runs.ebpf("ebpf", ebpf_k[0], o.g0_ebpf, seed, false, events, noise_csv, suffix);
+      }
+      runs.slam("ebslam2d", 10, o.g0_slam, seed, false, events, noise_csv, suffix, robust);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Simulated floor-robot runs: EB-PF and EB-SLAM-2D accuracy and speed"};
+  Options o;
+  addOptions(app, o);
   CLI11_PARSE(app, argc, argv);
 
   try {
-    std::vector<fs::path> mocap_files;
-    for (const auto& entry : fs::directory_iterator(fs::path(data_dir) / "tum-groundtruth")) {
-      const std::string name = entry.path().filename().string();
-      if (name.find("freiburg2_pioneer_") != std::string::npos &&
-          name.find(trajectory_filter) != std::string::npos) {
-        mocap_files.push_back(entry.path());
-      }
-    }
-    std::sort(mocap_files.begin(), mocap_files.end());
-    if (mocap_files.empty())
-      throw std::runtime_error("no freiburg2_pioneer_* files in " + data_dir);
-    fs::create_directories(out_dir);
+    const std::vector<fs::path> mocap_files = pioneerTrajectories(o.data_dir, o.trajectory_filter);
+    fs::create_directories(o.out_dir);
     const char* header =
         "trajectory,method,particles,batch,resample,g0,latency_s,seed,events,duration_s,"
         "rmse_pos_m,rmse_rot_deg,failed,events_per_s,rmse_pos_smoothed_m,rmse_pos_raw_m,"
         "best_offset_s";
-    std::ofstream csv(fs::path(out_dir) / "runs.csv");
+    std::ofstream csv(fs::path(o.out_dir) / "runs.csv");
     csv << header << '\n';
-    const std::vector<double> noise_rates = parseList<double>(noise_rates_text);
+    const std::vector<double> noise_rates = parseList<double>(o.noise_rates_text);
     std::ofstream noise_csv, denoise_csv;
     if (!noise_rates.empty()) {
-      noise_csv.open(fs::path(out_dir) / "noise_runs.csv");
+      noise_csv.open(fs::path(o.out_dir) / "noise_runs.csv");
       noise_csv << header << ",noise_rate,variant\n";
-      denoise_csv.open(fs::path(out_dir) / "denoise.csv");
+      denoise_csv.open(fs::path(o.out_dir) / "denoise.csv");
       denoise_csv << "trajectory,noise_rate,window_us,min_support,polarity_match,refractory,signal,"
                      "signal_kept,noise,"
                      "noise_removed,events_per_s\n";
@@ -317,193 +556,19 @@ int main(int argc, char** argv) {
       std::string name = mocap.filename().string();
       name = name.substr(name.find("freiburg2_"));
       if (const auto end = name.find("-groundtruth"); end != std::string::npos) name.resize(end);
-      const fs::path dir = fs::path(out_dir) / name;
+      const fs::path dir = fs::path(o.out_dir) / name;
       const auto sim_start = std::chrono::steady_clock::now();
       const Simulated run =
-          simulateRun(mocap, dir, duration_s, 1, EventModelConfig{}.noise_rate_hz_per_pixel);
+          simulateRun(mocap, dir, o.duration_s, 1, EventModelConfig{}.noise_rate_hz_per_pixel);
       const double sim_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
-      const double run_duration = run.ground_truth.back().t_s - run.ground_truth.front().t_s;
+      const TrajectoryRuns runs(o, name, dir, run, camera);
       std::printf("%s: %zu events over %.1f s (simulation/loading %.1f s)\n", name.c_str(),
-                  run.events.size(), run_duration, sim_seconds);
+                  run.events.size(), runs.duration(), sim_seconds);
       std::fflush(stdout);
-      const Pose2 start = tools::toPose2(run.ground_truth.front());
-      TrajectoryEvaluationConfig eval;
-      eval.estimate_time_offset = false;  // simulated events share the ground truth's clock
-
-      // Sensor model cached on a 1 cm grid (2 x 2 means of the 5 mm one, which keeps cell
-      // centres): a quarter of the memory, so the per-event lookups stay in cache.
-      const GridMap2f fine =
-          makeEdgeLikelihoodMap(run.map.edges, run.map.metres_per_pixel, run.map.origin_m,
-                                EbpfConfig{}.gamma * camera.wTrig());
-      GridMap2f likelihood(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m,
-                           fine.origin_x_m, fine.origin_y_m);
-      for (int r = 0; r < likelihood.height; ++r) {
-        for (int c = 0; c < likelihood.width; ++c) {
-          likelihood.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
-                                         fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
-        }
-      }
-      const auto runEbpf = [&](const std::string& method, int k, double g0, int seed, bool save,
-                               const EventVector& events, std::ostream& out,
-                               const std::string& suffix) {
-        EbpfConfig config;
-        config.filter.resample_every = k;
-        config.filter.g0 = g0;
-        config.filter.batch_size = batch;
-        config.filter.latency_compensation_s = latency_s;
-        config.filter.seed = static_cast<std::uint64_t>(seed);
-        EventParticleFilter filter(config, camera, likelihood, start);
-        // As tools::runFilter, recording the compensated and the raw estimate.
-        Trajectory estimate, raw;
-        const auto t_start = std::chrono::steady_clock::now();
-        for (std::size_t i = 0; i < events.size(); i += 100) {
-          const std::size_t n = std::min<std::size_t>(100, events.size() - i);
-          filter.process(events.data() + i, n);
-          const double t = static_cast<double>(events[i + n - 1].t_us) * 1e-6;
-          if (!estimate.empty() && t <= estimate.back().t_s) continue;
-          estimate.push_back(tools::toStampedPose(t, filter.estimate()));
-          raw.push_back(tools::toStampedPose(t, filter.rawEstimate()));
-        }
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-        if (save) {
-          writeTumTrajectory(
-              (dir / ("ebpf_K" + std::to_string(k) + "_s" + std::to_string(seed) + ".tum"))
-                  .string(),
-              estimate);
-        }
-        const auto [pos, rot] = directRmse(estimate, run.ground_truth);
-        const double pos_raw = directRmse(raw, run.ground_truth).first;
-        const double offset = bestTimeOffset(raw, run.ground_truth);
-        const bool failed = !(pos <= failure_m);
-        const double smoothed = directRmse(meanFiltered(estimate, 10), run.ground_truth).first;
-        out << name << ',' << method << ',' << config.filter.num_particles << ',' << batch << ','
-            << k << ',' << g0 << ',' << latency_s << ',' << seed << ',' << events.size() << ','
-            << run_duration << ',' << pos << ',' << rot << ',' << failed << ','
-            << events.size() / seconds << ',' << smoothed << ',' << pos_raw << ',' << offset
-            << suffix << '\n';
-        out.flush();
-        std::printf(
-            "  %-8s N=%3d K=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg (raw %.2f cm, best "
-            "offset %+.0f ms), %.0f events/s\n",
-            method.c_str(), config.filter.num_particles, k, g0, seed, pos * 100, rot, pos_raw * 100,
-            offset * 1e3, events.size() / seconds);
-        std::fflush(stdout);
-      };
-      const auto runSlam = [&](const std::string& method, int n, double g0, int seed, bool save,
-                               const EventVector& events, std::ostream& out,
-                               const std::string& suffix, bool noise_aware = false) {
-        Ebslam2dConfig config;
-        config.noise_aware_diffusion = noise_aware;
-        config.filter.g0 = g0;
-        config.filter.batch_size = batch;
-        config.filter.num_particles = n;
-        config.filter.seed = static_cast<std::uint64_t>(seed);
-        EventSlam2d slam(config, camera, start);
-        Trajectory estimate;
-        const double seconds = tools::runFilter(slam, events, 100, estimate);
-        const std::string stem = "slam_N" + std::to_string(n) + "_s" + std::to_string(seed);
-        if (save) {
-          writeTumTrajectory((dir / (stem + ".tum")).string(), estimate);
-          if (seed == 1) cv::imwrite((dir / (stem + "_map.png")).string(), mapToImage(slam.map()));
-        }
-        const TrajectoryEvaluation e = evaluateTrajectory(estimate, run.ground_truth, eval);
-        const bool failed = !(e.position_rmse_m <= failure_m);
-        out << name << ',' << method << ',' << n << ',' << batch << ','
-            << config.filter.resample_every << ',' << g0 << ",0," << seed << ',' << events.size()
-            << ',' << run_duration << ',' << e.position_rmse_m << ',' << e.rotation_rmse_deg << ','
-            << failed << ',' << events.size() / seconds << ",,," << suffix << '\n';
-        out.flush();
-        std::printf("  %-8s N=%3d G0=%5.0f seed %d: RMSE %.2f cm %.2f deg%s, %.0f events/s\n",
-                    method.c_str(), n, g0, seed, e.position_rmse_m * 100, e.rotation_rmse_deg,
-                    failed ? " (diverged)" : "", events.size() / seconds);
-        std::fflush(stdout);
-      };
-      const std::vector<int> ebpf_k = parseList<int>(ebpf_resample_text);
-      for (int k : noise_only ? std::vector<int>{} : ebpf_k) {
-        for (int seed = 1; seed <= seeds; ++seed)
-          runEbpf("ebpf", k, g0_ebpf, seed, true, run.events, csv, "");
-      }
-      for (int n : noise_only ? std::vector<int>{} : parseList<int>(particles_text)) {
-        for (int seed = 1; seed <= seeds; ++seed)
-          runSlam("ebslam2d", n, g0_slam, seed, true, run.events, csv, "");
-      }
-      // G0 sweeps over every trajectory and seed: the defaults are chosen on the whole set.
-      for (double g0 : noise_only ? std::vector<double>{} : parseList<double>(g0_sweep_ebpf)) {
-        if (ebpf_k.empty() || g0 == g0_ebpf) continue;  // the main runs above
-        for (int seed = 1; seed <= seeds; ++seed)
-          runEbpf("ebpf_g0", ebpf_k[0], g0, seed, false, run.events, csv, "");
-      }
-      for (double g0 : noise_only ? std::vector<double>{} : parseList<double>(g0_sweep_slam)) {
-        if (g0 == g0_slam) continue;
-        for (int seed = 1; seed <= seeds; ++seed)
-          runSlam("ebslam2d_g0", 10, g0, seed, false, run.events, csv, "");
-      }
-      // Noise runs: the same trajectory at other background-activity rates, with and without
-      // the background-activity filter.
+      if (!o.noise_only) defaultNoiseRuns(o, runs, run.events, csv);
       for (double rate : noise_rates) {
-        char rate_text[32];
-        std::snprintf(rate_text, sizeof rate_text, "%g", rate);
-        const Simulated noisy =
-            simulateRun(mocap, dir / ("noise" + std::string(rate_text)), duration_s, 1, rate);
-        if (noisy.noise_labels.size() != noisy.events.size()) {
-          throw std::runtime_error("no noise labels for " + (dir / rate_text).string() +
-                                   "; delete the folder to simulate it again");
-        }
-        for (int window : parseList<int>(denoise_windows_text)) {
-          for (const auto& [support, polarity] : {std::pair<int, bool>{1, false},
-                                                  {1, true},
-                                                  {2, false},
-                                                  {2, true},
-                                                  {3, true},
-                                                  {4, true}}) {
-            BackgroundActivityFilterConfig c = denoise;
-            c.window_us = window;
-            c.min_support = support;
-            c.polarity_match = polarity;
-            const auto t_start = std::chrono::steady_clock::now();
-            const DenoisingScore d =
-                scoreDenoising(c, SensorSize{128, 128}, noisy.events, noisy.noise_labels);
-            const double seconds =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-            denoise_csv << name << ',' << rate << ',' << window << ',' << support << ',' << polarity
-                        << ',' << c.refractory_filter << ',' << d.signal << ',' << d.signal_kept
-                        << ',' << d.noise << ',' << d.noise_removed << ','
-                        << noisy.events.size() / seconds << '\n';
-            std::printf(
-                "  noise %g Hz, window %d us, support %d%s: signal kept %.1f %%, noise removed "
-                "%.1f %%\n",
-                rate, window, support, polarity ? " same polarity" : "",
-                100.0 * d.signalKeptFraction(), 100.0 * d.noiseRemovedFraction());
-          }
-        }
-        denoise_csv.flush();
-        BackgroundActivityFilter filter(denoise, SensorSize{128, 128});
-        EventVector filtered;
-        filter.filter(noisy.events, filtered);
-        std::printf("  noise %g Hz: %zu events, %zu after the filter\n", rate, noisy.events.size(),
-                    filtered.size());
-        std::fflush(stdout);
-        // Seeds outermost: an interrupted sweep has every variant with the same seeds.
-        const std::vector<std::string> variants = parseList<std::string>(noise_variants_text);
-        for (int seed = 1; seed <= noise_seeds; ++seed) {
-          for (const std::string& variant : variants) {
-            // off: raw events, thesis model; filter: the background-activity filter first;
-            // robust: EB-SLAM-2D's noise-aware diffusion (EB-PF runs only without it).
-            const bool use_filter = variant == "filter" || variant == "filter+robust";
-            const bool robust = variant == "robust" || variant == "filter+robust";
-            if (!use_filter && !robust && variant != "off") {
-              throw std::invalid_argument("unknown noise variant '" + variant + "'");
-            }
-            const EventVector& events = use_filter ? filtered : noisy.events;
-            const std::string suffix = "," + std::string(rate_text) + "," + variant;
-            if (!ebpf_k.empty() && !robust) {
-              runEbpf("ebpf", ebpf_k[0], g0_ebpf, seed, false, events, noise_csv, suffix);
-            }
-            runSlam("ebslam2d", 10, g0_slam, seed, false, events, noise_csv, suffix, robust);
-          }
-        }
+        noiseRuns(o, mocap, dir, name, rate, runs, noise_csv, denoise_csv);
       }
     }
   } catch (const std::exception& e) {

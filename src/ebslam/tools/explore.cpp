@@ -5,6 +5,8 @@
 // covered.png} and one line per run to summary.csv (scripts/exploration_report.py plots them).
 // Exit status: 0 success, 1 usage / input error.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -20,8 +22,87 @@
 
 namespace fs = std::filesystem;
 
+namespace {
+
+using namespace ebslam;
+
+// Position errors of a run: after alignment, raw (the samples' error) and largest [m].
+struct RunErrors {
+  double rmse_aligned = 0.0, rmse_raw = 0.0, max_error = 0.0;
+};
+
+RunErrors runErrors(const ExplorationRunResult& r) {
+  RunErrors errors;
+  TrajectoryEvaluationConfig eval;
+  eval.estimate_time_offset = false;  // simulated events share the ground-truth clock
+  eval.max_association_gap_s = 0.1;
+  errors.rmse_aligned = evaluateTrajectory(r.estimate, r.ground_truth, eval).position_rmse_m;
+  double sum2 = 0.0;
+  for (const ExplorationSample& s : r.samples) {
+    sum2 += s.position_error_m * s.position_error_m;
+    errors.max_error = std::max(errors.max_error, s.position_error_m);
+  }
+  errors.rmse_raw = std::sqrt(sum2 / static_cast<double>(r.samples.size()));
+  return errors;
+}
+
+// <stem>_{series.csv,gt.tum,covered.png}, and for SLAM runs _{est.tum,hex.csv,bumps.csv,
+// path.csv,log.txt,slam_map.png}.
+void writeRunFiles(const std::string& stem, const ExplorationRunResult& r) {
+  std::ofstream series(stem + "_series.csv");
+  series << "t_s,covered,position_error_m,bumps\n";
+  for (const ExplorationSample& s : r.samples) {
+    series << s.t_s << ',' << s.covered << ',' << s.position_error_m << ',' << s.bumps << '\n';
+  }
+  writeTumTrajectory(stem + "_gt.tum", r.ground_truth);
+  if (!r.estimate.empty()) {
+    writeTumTrajectory(stem + "_est.tum", r.estimate);
+    std::ofstream hex(stem + "_hex.csv");
+    hex << "x,y,z,e,gain,blocked\n";
+    for (std::size_t c = 0; c < r.hex_centres.size(); ++c) {
+      hex << r.hex_centres[c].x() << ',' << r.hex_centres[c].y() << ',' << r.z[c] << ',' << r.e[c]
+          << ',' << r.gain[c] << ',' << static_cast<int>(r.blocked[c]) << '\n';
+    }
+    std::ofstream bumps(stem + "_bumps.csv");
+    bumps << "x,y\n";
+    for (const Eigen::Vector2d& b : r.bump_points) bumps << b.x() << ',' << b.y() << '\n';
+    std::ofstream path(stem + "_path.csv");
+    path << "x,y\n";
+    for (const Eigen::Vector2d& p : r.last_path) path << p.x() << ',' << p.y() << '\n';
+    std::ofstream log(stem + "_log.txt");
+    for (const std::string& m : r.messages) log << m << '\n';
+    cv::imwrite(stem + "_slam_map.png", r.slam_map);
+  }
+  cv::imwrite(stem + "_covered.png", r.covered);
+}
+
+// One line of summary.csv and of the console.
+void reportRun(std::ofstream& summary, const std::string& layout, const std::string& method,
+               int seed, const ExplorationRunResult& r, double divergence_m) {
+  const RunErrors errors = r.estimate.empty() ? RunErrors{} : runErrors(r);
+  const double duration = r.samples.empty() ? 0.0 : r.samples.back().t_s;
+  const bool diverged = !r.estimate.empty() && !(errors.rmse_aligned <= divergence_m);
+  const double per_call_ms = r.planner_calls > 0 ? 1e3 * r.planner_seconds / r.planner_calls : 0.0;
+  summary << layout << ',' << method << ',' << seed << ',' << duration << ',' << r.time_to_90_s
+          << ',' << (r.samples.empty() ? 0.0 : r.samples.back().covered) << ','
+          << r.reachable_area_m2 << ',' << errors.rmse_aligned << ',' << errors.rmse_raw << ','
+          << errors.max_error << ',' << diverged << ',' << r.bump_events << ','
+          << (duration > 0.0 ? r.bump_events * 60.0 / duration : 0.0) << ',' << r.events << ','
+          << r.wall_time_s << ',' << per_call_ms << '\n';
+  summary.flush();
+  std::printf(
+      "%-10s %-6s seed %d: 90%% at %6.1f s, covered %.3f of %.1f m^2, RMSE %.2f cm "
+      "(raw %.2f, max %.2f), %zu bumps, %.0f s wall, planner %.3f ms/call\n",
+      layout.c_str(), method.c_str(), seed, r.time_to_90_s,
+      r.samples.empty() ? 0.0 : r.samples.back().covered, r.reachable_area_m2,
+      errors.rmse_aligned * 100, errors.rmse_raw * 100, errors.max_error * 100, r.bump_events,
+      r.wall_time_s, per_call_ms);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  using namespace ebslam;
   CLI::App app{"Autonomous exploration with EB-SLAM-2D in the closed-loop simulator"};
   std::vector<std::string> plans;
   std::vector<int> seeds{1};
@@ -79,14 +160,13 @@ int main(int argc, char** argv) {
                  "rmse_aligned_m,rmse_raw_m,max_error_m,diverged,bumps,bumps_per_min,events,"
                  "wall_s,planner_ms_per_call\n";
     }
-    const double robot_radius = config.simulator.robot.radius_m;
+    std::vector<bool> methods;  // false: the gain planner, true: the random baseline
+    if (!baseline_only) methods.push_back(false);
+    if (with_baseline || baseline_only) methods.push_back(true);
     for (const std::string& plan_path : plans) {
-      const FloorPlan plan = readFloorPlan(plan_path, robot_radius);
+      const FloorPlan plan = readFloorPlan(plan_path, config.simulator.robot.radius_m);
       const std::string layout =
           plan.name.empty() ? fs::path(plan_path).stem().string() : plan.name;
-      std::vector<bool> methods;
-      if (!baseline_only) methods.push_back(false);
-      if (with_baseline || baseline_only) methods.push_back(true);
       for (int seed : seeds) {
         for (bool baseline : methods) {
           ExplorationRunConfig run = config;
@@ -97,63 +177,8 @@ int main(int argc, char** argv) {
           const std::string stem =
               (fs::path(output) / (layout + "_" + method + "_s" + std::to_string(seed))).string();
           const ExplorationRunResult r = runExploration(plan, run);
-          std::ofstream series(stem + "_series.csv");
-          series << "t_s,covered,position_error_m,bumps\n";
-          for (const ExplorationSample& s : r.samples) {
-            series << s.t_s << ',' << s.covered << ',' << s.position_error_m << ',' << s.bumps
-                   << '\n';
-          }
-          writeTumTrajectory(stem + "_gt.tum", r.ground_truth);
-          double rmse_aligned = 0.0, rmse_raw = 0.0, max_error = 0.0;
-          if (!r.estimate.empty()) {
-            writeTumTrajectory(stem + "_est.tum", r.estimate);
-            TrajectoryEvaluationConfig eval;
-            eval.estimate_time_offset = false;  // simulated events share the ground-truth clock
-            eval.max_association_gap_s = 0.1;
-            const TrajectoryEvaluation e = evaluateTrajectory(r.estimate, r.ground_truth, eval);
-            rmse_aligned = e.position_rmse_m;
-            double sum2 = 0.0;
-            for (const ExplorationSample& s : r.samples) {
-              sum2 += s.position_error_m * s.position_error_m;
-              max_error = std::max(max_error, s.position_error_m);
-            }
-            rmse_raw = std::sqrt(sum2 / static_cast<double>(r.samples.size()));
-            std::ofstream hex(stem + "_hex.csv");
-            hex << "x,y,z,e,gain,blocked\n";
-            for (std::size_t c = 0; c < r.hex_centres.size(); ++c) {
-              hex << r.hex_centres[c].x() << ',' << r.hex_centres[c].y() << ',' << r.z[c] << ','
-                  << r.e[c] << ',' << r.gain[c] << ',' << static_cast<int>(r.blocked[c]) << '\n';
-            }
-            std::ofstream bumps(stem + "_bumps.csv");
-            bumps << "x,y\n";
-            for (const Eigen::Vector2d& b : r.bump_points) bumps << b.x() << ',' << b.y() << '\n';
-            std::ofstream path(stem + "_path.csv");
-            path << "x,y\n";
-            for (const Eigen::Vector2d& p : r.last_path) path << p.x() << ',' << p.y() << '\n';
-            std::ofstream log(stem + "_log.txt");
-            for (const std::string& m : r.messages) log << m << '\n';
-            cv::imwrite(stem + "_slam_map.png", r.slam_map);
-          }
-          cv::imwrite(stem + "_covered.png", r.covered);
-          const double duration = r.samples.empty() ? 0.0 : r.samples.back().t_s;
-          const bool diverged = !r.estimate.empty() && !(rmse_aligned <= divergence_m);
-          const double per_call_ms =
-              r.planner_calls > 0 ? 1e3 * r.planner_seconds / r.planner_calls : 0.0;
-          summary << layout << ',' << method << ',' << seed << ',' << duration << ','
-                  << r.time_to_90_s << ',' << (r.samples.empty() ? 0.0 : r.samples.back().covered)
-                  << ',' << r.reachable_area_m2 << ',' << rmse_aligned << ',' << rmse_raw << ','
-                  << max_error << ',' << diverged << ',' << r.bump_events << ','
-                  << (duration > 0.0 ? r.bump_events * 60.0 / duration : 0.0) << ',' << r.events
-                  << ',' << r.wall_time_s << ',' << per_call_ms << '\n';
-          summary.flush();
-          std::printf(
-              "%-10s %-6s seed %d: 90%% at %6.1f s, covered %.3f of %.1f m^2, RMSE %.2f cm "
-              "(raw %.2f, max %.2f), %zu bumps, %.0f s wall, planner %.3f ms/call\n",
-              layout.c_str(), method.c_str(), seed, r.time_to_90_s,
-              r.samples.empty() ? 0.0 : r.samples.back().covered, r.reachable_area_m2,
-              rmse_aligned * 100, rmse_raw * 100, max_error * 100, r.bump_events, r.wall_time_s,
-              per_call_ms);
-          std::fflush(stdout);
+          writeRunFiles(stem, r);
+          reportRun(summary, layout, method, seed, r, divergence_m);
         }
       }
     }
