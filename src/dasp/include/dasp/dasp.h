@@ -1,16 +1,9 @@
 // Adaptive Superpixels (ASP, thesis ch. 2) and Depth-Adaptive Superpixels (DASP, thesis ch. 3).
-//
-// Entry points: computeDasp (RGB-D, depth-adaptive density and metric d_DA), computeAspRgb (the
-// SLIC-like colour-only baseline with constant density, or any user density), computeAspRgbd
-// (the naive RGB-D baseline of ch. 3.3). The individual stages (features, density, sampling,
-// DALIC iterations, superpoint fit) are declared in dasp/stages.h.
-//
-// Conventions used throughout:
-//  - Images are row-major; pixel coordinates (u, v) = (column, row) with the centre of pixel
-//    (x, y) at (x, y), the convention of the pinhole intrinsics (eq. 3.4).
-//  - 3D quantities are in metres in the camera optical frame (x right, y down, z forward).
-//  - Labels are CV_32SC1; -1 marks pixels without valid depth or that no superpixel claimed.
-//  - All functions throw std::invalid_argument with a reason for invalid input.
+// Entry points: computeDasp (RGB-D, metric d_DA), computeAspRgb (SLIC-like colour-only baseline)
+// and computeAspRgbd (naive RGB-D baseline, ch. 3.3); the stages are in dasp/stages.h. Pixel
+// (u, v) = (column, row), pixel centres at integer coordinates (eq. 3.4); 3D in metres in the
+// camera optical frame; labels CV_32SC1, -1 = unlabelled. Invalid input throws
+// std::invalid_argument. Details: docs/dasp_core.md#conventions
 #pragma once
 
 #include <cstdint>
@@ -92,17 +85,9 @@ struct DaspConfig {
   float depth_exponent = 2.0f;
   /// Step h in pixels of the depth finite differences for normals (eq. 3.6, 3.7).
   int normal_step_px = 2;
-  /// Relative depth jump (|dD| / D) above which two pixels lie across a depth discontinuity:
-  /// the normals use the one-sided difference on the other side, and connectivity enforcement
-  /// does not connect them. Why 0.02: at PrimeSense resolution (f about 525 px) and the normal
-  /// step of 2 px, a continuous surface changes depth this much only where it is steeper than
-  /// about 79 deg to the image plane, the slant at which max_slant_factor = 5 clamps the
-  /// density; and it is above the sensor's depth quantisation up to 6 m (about 0.3 % of D per
-  /// metre of D, computed from a 7.5 cm baseline, f = 580 px and 1/8 px disparity steps). For
-  /// much smaller f (low-resolution images) raise it in proportion to 525 / f. On the learn
-  /// split it gives 4-11 % lower undersegmentation error than 0.05 (K = 250 to 2000; 10 % at
-  /// K = 1000 over three seeds) at equal recall, compression error and compactness
-  /// (docs/results/dasp.md).
+  /// Relative depth jump |dD| / D (unitless) above which two pixels lie across a depth edge: no
+  /// normal differences and no connectivity across it. Not in the thesis; why 0.02 and when to
+  /// raise it (f well below 525 px): docs/dasp_core.md#depth-jump-ratio
   float depth_jump_ratio = 0.02f;
   std::uint64_t seed = 0;  ///< Seed of the random generator (sampling). Same seed, same output.
   int threads = 1;         ///< Worker threads: 1 = single-threaded, 0 = all cores (TBB).

@@ -1,18 +1,9 @@
 // Partition quality metrics for superpixels and segmentations (thesis appendix A and the
-// superpixel benchmark literature), all evaluated over a validity mask.
-//
-// Conventions shared by every function in this header:
-// - `labels` is the partition under test, CV_32SC1. Labels >= 0 are segments; a negative label
-//   marks a pixel the method left unlabelled (DASP: no valid depth).
-// - `ground_truth` is a reference partition: CV_32SC1, CV_16UC1 or CV_8UC1, any label values.
-// - `mask` is CV_8UC1 (non-zero = evaluate this pixel) or empty (= every pixel is valid).
-// - Only pixels inside the mask are looked at. Neighbourhood relations (boundaries, connectivity)
-//   are 4-neighbourhoods; a neighbour outside the mask or the image is "outside".
-// - Segment-versus-reference metrics (boundary scores, undersegmentation error, ASA, compression
-//   error, explained variation) treat all unlabelled pixels inside the mask as ONE extra segment,
-//   so a method cannot improve its score by leaving pixels unlabelled. Shape metrics (connectivity,
-//   isoperimetric quotients, segment count, uniform distribution) look at segments >= 0 only.
-// - Size mismatches, wrong types and masks without valid pixels throw std::invalid_argument.
+// superpixel benchmark literature), evaluated over a validity mask. labels: CV_32SC1, < 0 =
+// unlabelled; ground_truth: CV_32SC1, CV_16UC1 or CV_8UC1; mask: CV_8UC1 (non-zero = evaluate) or
+// empty (all pixels); 4-neighbourhoods. Segment-versus-reference metrics count all unlabelled
+// pixels in the mask as ONE extra segment; shape metrics look at segments >= 0 only. Invalid
+// input throws std::invalid_argument. Details: docs/dasp_core.md#metrics
 #pragma once
 
 #include <opencv2/core.hpp>

@@ -195,18 +195,12 @@ class Dalic {
   std::unique_ptr<Scratch> scratch_;
 };
 
-/// Makes every label 4-connected: for each label the largest piece keeps it if its weight (sum
-/// of `weight` over its pixels, or its pixel count if `weight` is empty) is at least
-/// min_weight; all other pieces and unlabelled valid pixels join the neighbouring label they
-/// share the longest border with; pieces that touch no label become new labels if heavy enough,
-/// else -1. Labels are renumbered 0..n-1 in order of first appearance. Returns n.
-/// valid: CV_8UC1 (non-zero = pixel may be labelled) or empty (all valid). weight: CV_32FC1
-/// (e.g. the density, so that min_weight is a fraction of a superpixel) or empty.
-/// depth: CV_32FC1 metres (0 = invalid) or empty. If given, connectivity is on the surface:
-/// 4-neighbours whose depths differ by more than depth_jump_ratio times the nearer depth are not
-/// connected, so a superpixel straddling a depth discontinuity is split and the piece behind
-/// the jump joins a superpixel on its own surface (a piece walled in by jumps on all sides joins
-/// across them).
+/// Makes every label 4-connected, on the surface if depth is given (no connection across a depth
+/// jump of more than depth_jump_ratio times the nearer depth): pieces lighter than min_weight and
+/// unlabelled valid pixels join the label they share the longest border with, or become -1. Labels
+/// renumbered 0..n-1; returns n. valid: CV_8UC1 or empty (all valid); weight: CV_32FC1 (e.g. the
+/// density) or empty (pixel count); depth: CV_32FC1 metres (0 = invalid) or empty. Not in the
+/// thesis. Rules in full: docs/dasp_core.md#connectivity-enforcement
 int enforceConnectivity(cv::Mat& labels, const cv::Mat& valid, const cv::Mat& weight,
                         double min_weight, const cv::Mat& depth = cv::Mat(),
                         float depth_jump_ratio = DaspConfig{}.depth_jump_ratio);

@@ -23,17 +23,12 @@ struct WeightedGraph {
   std::vector<GraphEdge> edges;
 };
 
-/// Parameters of the superpixel neighbourhood graph and of the superpixel distance d_S.
-/// d_S = weight_position d_v + weight_normal d_n + weight_color d_c (eq. 4.17) with
-///   d_c = |c1 - c2| (RGB in [0, 1], eq. 4.19),
-///   d_v = max(0, |v1 - v2| - 2R) / 2R (eq. 4.20, R the superpixel radius, metres),
-///   d_n = max(0, (n2 - n1) . (v1 - v2) / |v1 - v2|) (eq. 4.21, concave edges only; the sign
-///         is the thesis' turned for our normals, which point out of the surface towards the
-///         camera).
-/// The thesis gives no values for Theta and the lambdas; these defaults were chosen by grids on
-/// the whole OSD learn split (all 45 frames, ODS boundary F1, docs/results/sdasp.md), not on one
-/// frame: the middle of the plateau (ODS F1 0.92 +- 0.01 for lambda_c 1..3, lambda_v 1..2,
-/// lambda_n 4..8, Theta 1..4).
+/// Parameters of the superpixel neighbourhood graph and of the superpixel distance d_S (s-DASP,
+/// §4.3.1): d_S = weight_position d_v + weight_normal d_n + weight_color d_c (eq. 4.17) with
+/// d_c = |c1 - c2| (RGB in [0, 1], eq. 4.19), d_v = max(0, |v1 - v2| - 2R) / 2R (eq. 4.20, R in
+/// metres), d_n = max(0, (n2 - n1) . (v1 - v2) / |v1 - v2|) (eq. 4.21, concave edges only). The
+/// thesis gives no values; defaults from grids on the OSD learn split (docs/results/sdasp.md).
+/// Normal sign convention and the grids: docs/dasp_core.md#superpixel-distance
 struct SuperpixelGraphConfig {
   /// Theta of eq. 4.16: two superpixels are neighbours when more than this many 4-neighbour pixel
   /// pairs (p, q), p in one and q in the other, exist. >= 0.

@@ -1,22 +1,11 @@
 #pragma once
 
-// Calibration of the D-eDVS with a pulsed LED (thesis 8.2, eq. 8.4-8.6, fig. 8.4).
-//
-// A calibration plate with a diode blinking at a known frequency is moved in front of the rig.
-// The depth camera gives the diode's 3D position (a depth pixel u plus its depth D: the plate
-// is tracked in the registered colour image, the depth comes from the plate's surface around
-// u); the eDVS sees the diode as a small spot that switches on and off every period, which
-// separates its events from those of the moving plate, the background and noise. Each depth
-// frame with a found diode gives one correspondence (u_i, D_i, v_i); eq. 8.5 is solved with
-// Levenberg-Marquardt (Ceres) over the extrinsics and the eDVS camera (focal length, centre,
-// eq. 8.2 distortion), with the depth camera's intrinsics fixed (the thesis fixes its focal
-// length, as the two focal lengths are coupled; its centre is nearly interchangeable with a
-// rotation of a rig this close and is kept at its factory value as well).
-//
-// Frames and units: eDVS and depth optical frames (x right, y down, z forward), metres, pixel
-// centres at integer coordinates. Eq. 8.4 maps depth-frame points into the eDVS frame (R, t of
-// the thesis = edvs_from_depth); the result is stored as DedvsSensors::depth_from_edvs, the
-// transform the fusion and the simulator use (p_depth = depth_from_edvs * p_edvs).
+// Calibration of the D-eDVS with a pulsed LED (thesis 8.2, eq. 8.4-8.6, fig. 8.4): a blinking
+// diode on a plate gives correspondences (depth pixel u_i, depth D_i, eDVS pixel v_i); eq. 8.5 is
+// solved with Levenberg-Marquardt (Ceres) over the extrinsics and the eDVS camera, the depth
+// intrinsics fixed. Optical frames, metres, pixel centres at integer coordinates. The R, t of
+// eq. 8.4 is edvs_from_depth; the result is stored as DedvsSensors::depth_from_edvs
+// (p_depth = depth_from_edvs * p_edvs). Details: docs/dedvs_core.md#calibration
 
 #include <cstdint>
 #include <optional>

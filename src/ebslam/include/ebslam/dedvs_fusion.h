@@ -1,22 +1,11 @@
 #pragma once
 
-// Depth for every eDVS event from the depth camera (thesis 8.2, fig. 8.5).
-//
-// An eDVS pixel's ray, back-projected into the depth image, is a short line segment (its
-// epipolar line between min_depth_m and max_depth_m). Once per calibration the segment's depth
-// pixels are listed per eDVS pixel, near to far, each with d_i: the depth-camera z of the ray's
-// point seen through that depth pixel. Per event the measured depths D_i at those pixels are
-// compared with d_i; the ray meets the measured surface where D_i - d_i changes sign from
-// >= 0 (ray in front of the surface) to <= 0 between two neighbouring valid samples whose
-// measured depths are continuous (the thesis' condition d_i <= D_i, D_{i+1} <= d_{i+1}); the
-// nearest such crossing is taken. The depth there is interpolated linearly in D - d (the thesis
-// averages D_i and D_{i+1}). Cost per event: at most the segment's sample count (about 20 for
-// a 4 cm baseline at 260 px focal length), independent of the image size.
-//
-// Frames: depth and 3D point in the eDVS optical frame (z = depth along the optical axis);
-// sensors.depth_from_edvs maps eDVS points into the depth optical frame.
-// Time: depth frames are placed on the event clock as stamp - depth_clock_offset_s; an event
-// takes the frame nearest in time within max_frame_age_s.
+// Depth for every eDVS event from the depth camera (thesis 8.2, fig. 8.5): the nearest crossing of
+// the event pixel's ray with the measured surface, searched along its epipolar segment in the
+// depth image (listed per eDVS pixel once per calibration). Frames: depth and 3D point in the eDVS
+// optical frame (z along the optical axis); sensors.depth_from_edvs maps eDVS points into the
+// depth frame. Time: depth frames on the event clock as stamp - depth_clock_offset_s; an event
+// takes the frame nearest in time within max_frame_age_s. Details: docs/dedvs_core.md#depth-fusion
 
 #include <cstdint>
 #include <deque>

@@ -1,19 +1,10 @@
 #pragma once
 
 // A simulated D-eDVS run as files (written by the dedvs_simulate tool, read by the fusion
-// evaluation and the RgbdEventSimulator nodelet). Directory layout:
-//   events.bin          events with ground truth (format below)
-//   depth/NNNNNN.png    depth frames, 16-bit PNG, millimetres, 0 = no depth
-//   colour/NNNNNN.png   registered colour, 8-bit BGR PNG
-//   frames.txt          one line per frame: `index t_true_s stamp_s` (stamp on the camera clock)
-//   rig_groundtruth.txt  TUM trajectory, depth optical frame -> world
-//   edvs_groundtruth.txt TUM trajectory, eDVS optical frame -> world
-//   sensors.yaml        the sensors (read back with readDedvsSensors)
-//
-// events.bin: magic "DEDVSEV1" (8 bytes), uint32 width, uint32 height, uint64 count, then
-// `count` little-endian records of 16 bytes: int64 t_us, uint16 x, uint16 y, float32 true
-// depth [m] (NaN = no surface), with x's bit 15 = polarity, y's bit 15 = noise event, y's
-// bit 14 = depth edge.
+// evaluation and the RgbdEventSimulator nodelet): events.bin (events with true depth [m]),
+// depth/ (16-bit PNG [mm], 0 = no depth) and colour/ frames, frames.txt, rig_ and
+// edvs_groundtruth.txt (TUM), sensors.yaml. Directory layout and the events.bin record format:
+// docs/dedvs_core.md#run-files
 
 #include <string>
 #include <vector>

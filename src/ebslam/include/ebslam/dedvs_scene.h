@@ -1,18 +1,10 @@
 #pragma once
 
 // Rooms for the D-eDVS simulator (thesis 8.2): walls, floor, ceiling, a table and boxes, each
-// face a TexturedPlane of the Scene type the event simulators share, with procedural textures.
-//
-// World frame: z up, metres (the TUM RGB-D motion-capture frame of the freiburg1 runs, whose
-// hand-held camera moves at 1.2-1.9 m height). The room is an axis-aligned box with the floor
-// at z = 0 built around a trajectory's positions.
-//
-// Textures: the dead-leaves model (Matheron 1968; Lee, Mumford and Huang, "Occlusion models for
-// natural images", IJCV 2001): opaque discs of random grey level with radii drawn from
-// p(r) ~ r^-3, stacked front to back until the plane is covered. It is scale invariant and
-// reproduces the statistics of natural images that decide an event camera's output: a 1/f^2
-// power spectrum, heavy-tailed gradient histograms and sharp occlusion edges at all scales.
-// Generated in code (no photographs), so its provenance is this file and its seed.
+// face a TexturedPlane of the shared Scene type with a procedural dead-leaves texture (Lee, Mumford
+// and Huang, IJCV 2001). World frame: z up, metres (the TUM RGB-D freiburg1 motion-capture frame);
+// the room is an axis-aligned box, floor at z = 0, built around a trajectory's positions.
+// Details: docs/dedvs_core.md#rooms-and-textures
 
 #include <cstdint>
 

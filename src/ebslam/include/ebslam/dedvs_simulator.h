@@ -1,34 +1,12 @@
 #pragma once
 
-// D-eDVS simulator (thesis 8.2): a hand-held rig carrying an eDVS (128 x 128 events) and a
-// PrimeSense-class depth camera with a registered colour image moves along a trajectory
-// through a Scene of textured planes (dedvs_scene.h builds furnished rooms).
-//
-// Frames (REP 103 optical frames: x right, y down, z forward; metres):
-//  - rig frame = the depth camera's optical frame (camera_depth_optical_frame; the colour image
-//    is registered to it). The trajectory gives rig -> world, as the TUM RGB-D ground truth
-//    gives the Kinect's optical frame.
-//  - eDVS optical frame (edvs_optical_frame): depth_from_edvs maps eDVS-frame points into the
-//    depth frame (p_depth = R p_edvs + t: the R, t of eq. 8.4).
-//
-// eDVS: rendered at >= render_rate_hz and more often when the image moves faster than
-// max_step_motion_px per step, so event times (interpolated linearly between renders) are
-// accurate to well under a millisecond. Projection eq. 8.1-8.2 (DistortionModel::kDivideEq81).
-// Intensity per pixel: nearest plane along the pixel's ray, its texture looked up in a mip
-// pyramid at the level of the pixel's footprint (trilinear: anti-aliased at every distance).
-// Events from EventGenerator (event_model.h), the model the 2D simulator uses.
-//
-// Depth camera (PrimeSense-like, Khoshelham and Oude Elberink 2012): the depth comes from a
-// disparity d = f_ir b / z measured at the IR camera's native resolution, with Gaussian
-// disparity noise and quantised to 1/subpixel_steps pixel, so noise and quantisation grow with
-// z^2; holes where the projector's pattern does not reach (a second render from the projector,
-// offset by the baseline), at depth edges (with a probability), at grazing angles and outside
-// [min_range_m, max_range_m]. Frames at frame_rate_hz, stamped on the camera's own clock:
-// stamp = true exposure time + clock_offset_s. Depth images CV_16UC1 in millimetres, 0 = no
-// depth (the PrimeSense/OpenNI convention); colour CV_8UC3 BGR.
-//
-// Time: trajectory clock in seconds; events in microseconds round(t * 1e6) of that clock.
-// Deterministic for a given seed; single-threaded.
+// D-eDVS simulator (thesis 8.2): a hand-held rig with an eDVS (128 x 128, eq. 8.1-8.2) and a
+// PrimeSense-like depth camera with registered colour moves along a trajectory through a Scene of
+// textured planes (dedvs_scene.h builds rooms). Frames: REP 103 optical frames, metres; rig frame
+// = depth optical frame (trajectory: rig -> world); p_depth = depth_from_edvs * p_edvs (R, t of
+// eq. 8.4). Time: trajectory clock [s], events round(t * 1e6) [us]; depth frames stamped on the
+// camera clock (true time + clock_offset_s). Depth CV_16UC1 [mm], 0 = no depth; colour CV_8UC3
+// BGR. Deterministic per seed; single-threaded. Details: docs/dedvs_core.md#simulator
 
 #include <cstdint>
 #include <functional>

@@ -1,26 +1,12 @@
 #pragma once
 
-// Event-based 3D SLAM (thesis 8.3, alg. 9): a particle filter over SE(3) localises a depth-event
-// sensor (D-eDVS: every event carries the 3D point it saw) against an occurrence map O that it
-// builds from the same events at the same time.
-//  - Pose p: camera optical frame -> map frame, map point = R e + t (the thesis writes the
-//    inverse, eq. 8.7/8.8). The map frame is the start pose's frame (alg. 9: p = 0).
-//  - Motion model: diffusion per event (eq. 8.11-8.15): position N(0, sigma_t^2 I); rotation by
-//    an angle N(0, sigma_r^2) about a uniformly random axis (eq. 8.13), as the small-angle
-//    quaternion of eq. 8.15, renormalised. A batch of b events diffuses with sqrt(b) sigma.
-//  - Score: s_i = (1 - alpha) s_i + alpha O(p_i e) per event (alg. 9), batched as eq. 6.30.
-//  - Map: O += N(. | p e, sigma) with sigma = D / (2 lambda f) (eq. 8.9/8.10), D the event's
-//    distance to the camera; splatted at the expected pose p_* (default) or at every particle
-//    weighted by its normalised score (eq. 8.9 literally). No normalisation map (8.3: "the
-//    normalization from EB-SLAM-2D is not performed").
-//  - Expected pose p_*: score-weighted mean (positions; quaternions sign-aligned and
-//    normalised), updated after every batch; resampling every K events.
-//
-// Input handling (documented behaviour, not exceptions): events whose point is not finite or
-// whose distance lies outside [min_range_m, max_range_m] are skipped and counted
-// (rejectedEvents()); with event_share < 1 only that share of the accepted events is used
-// (evenly, deterministically). Timestamps going backwards are misuse: process() throws
-// std::invalid_argument and processes nothing of that call.
+// Event-based 3D SLAM (thesis 8.3, alg. 9): a particle filter over SE(3) localises a D-eDVS
+// (every event carries its 3D point) against an occurrence map O (voxel_map.h) built from the same
+// events. Pose p: camera optical frame -> map frame, map point = R e + t (the thesis writes the
+// inverse, eq. 8.7/8.8); map frame = start pose. Diffusion eq. 8.11-8.15, score alg. 9 (batched
+// as eq. 6.30), map splat sigma = D / (2 lambda f) [m] (eq. 8.9/8.10). Events with a non-finite
+// point or outside [min_range_m, max_range_m] are skipped and counted (rejectedEvents());
+// timestamps going backwards throw std::invalid_argument. Details: docs/ebslam_core.md#eb-slam-3d
 
 #include <cstddef>
 #include <cstdint>

@@ -1,15 +1,10 @@
 #pragma once
 
-// A small synthetic depth-event source for EB-SLAM-3D's tests, benchmarks and its evaluation
-// without the D-eDVS simulator: a closed box room around a camera path whose six faces carry
-// random straight texture edges (posters, lines), sampled as 3D points; a pinhole event sensor
-// moving along the path fires an event whenever the projection of an edge point enters another
-// pixel, and annotates it with the point's noisy depth (sigma = k D^2, PrimeSense-like) back-
-// projected through the pixel centre, as the D-eDVS does (8.2). A share of noise events with
-// random depth is added. The room is convex, so no edge point is occluded.
-//
-// This is a geometric model of where events happen, not a model of DVS pixels (no contrast
-// threshold, no refractory period); the D-eDVS simulator is the realistic source.
+// A small synthetic depth-event source for EB-SLAM-3D's tests, benchmarks and evaluation without
+// the D-eDVS simulator: a pinhole event sensor moves through a closed box room with random straight
+// texture edges and fires an event whenever an edge point's projection enters another pixel, with
+// PrimeSense-like depth noise (sigma = k D^2) as in the D-eDVS (8.2). A geometric model of where
+// events happen, not of DVS pixels. Details: docs/ebslam_core.md#synthetic-depth-events
 
 #include <cstdint>
 #include <vector>

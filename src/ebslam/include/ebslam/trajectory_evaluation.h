@@ -1,25 +1,12 @@
 #pragma once
 
-// Trajectory evaluation (thesis section 8.4, eq. 8.16-8.20): the estimated path is mapped into
-// the ground-truth frame by the alignment a = (t_a, p_a, q_a) of eq. 8.18,
+// Trajectory evaluation (thesis 8.4, eq. 8.16-8.20): the estimated path is mapped into the
+// ground-truth frame by the alignment a = (t_a, p_a, q_a) of eq. 8.18,
 //   A((t, p, q), a) = (t + t_a, s * q_a p + p_a, q_a q),
-// and the alignment minimising the position RMSE (eq. 8.16, 8.17, 8.19) is found: for a fixed
-// time offset t_a the rigid part (q_a, p_a, and the scale s when asked) has the closed-form
-// least-squares solution of Horn / Umeyama (1991) on the time-associated position pairs; the
-// offset itself is found by a 1-D search (a coarse grid over [-max, +max], then golden-section
-// refinement around the best grid point). The thesis used particle swarm optimisation for the
-// joint problem; the split into closed form + 1-D search finds the same optimum
-// deterministically.
-//
-// Association: the thesis matches each estimated pose to the temporally nearest ground-truth
-// pose (mu(i) = argmin_j |t_i - t'_j|). That makes the error piecewise constant in t_a, which a
-// 1-D search cannot refine below the ground-truth sampling period, so the default here
-// interpolates the ground truth at t_i + t_a (linear position, slerp rotation), continuous in
-// t_a; kNearest gives the thesis' definition. Estimated poses without ground truth within
-// max_association_gap_s are left out (the thesis' remark on rejecting path ends).
-//
-// Rotation error (eq. 8.20): e_rot = |2 acos((q^-1 q')_w)| between the aligned estimated and
-// the ground-truth orientation, reported in degrees (the sign of the quaternion is ignored).
+// that minimises the position RMSE [m] (eq. 8.16, 8.17, 8.19): closed-form Horn / Umeyama for a
+// fixed t_a, a 1-D search over t_a. Ground truth interpolated at t_i + t_a by default (kNearest:
+// the thesis' nearest pose). Rotation error (eq. 8.20) in degrees.
+// Details: docs/trajectory_evaluation.md#what-is-computed-thesis-84
 
 #include <cstddef>
 #include <vector>

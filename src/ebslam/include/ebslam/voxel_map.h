@@ -1,18 +1,11 @@
 #pragma once
 
 // Sparse voxel grid of dense chunks for EB-SLAM-3D's occurrence map (thesis 8.3, "Map data
-// structure"): 8^3 float voxels per chunk (2 KiB), chunks created on first write and found
-// through an open-addressing hash map keyed by the chunk's integer coordinates. The extent is
-// unbounded (chunk coordinates within +-2^20, i.e. +-84 km at 1 cm voxels) and the memory grows
-// with the surface seen, not with the volume. The thesis used 32^3 chunks under an octree; 8^3
-// keeps the memory close to the surface: every isolated (noise) event costs one chunk, which is
-// 2 KiB here against 128 KiB at 32^3 (16^3: 24 MiB bound reached after 4 s of a synthetic
-// fr1_xyz run, 8^3: the same scene in a third of the memory, equally fast). An optional memory
-// bound evicts the least recently written chunk when a new chunk would exceed it (for endless
-// runs).
-//
-// Voxel (i, j, k) covers [i v, (i+1) v) x [j v, (j+1) v) x [k v, (k+1) v) in the map frame, with v
-// the voxel edge length; its centre is ((i + 0.5) v, ...).
+// structure"): 8^3 float voxels per chunk (2 KiB) in an open-addressing hash map keyed by the
+// chunk's integer coordinates; unbounded extent, memory grows with the surface seen; an optional
+// memory bound evicts the least recently written chunk. Voxel (i, j, k) covers
+// [i v, (i+1) v) x [j v, (j+1) v) x [k v, (k+1) v) in the map frame, v the voxel edge length [m].
+// Details (why 8^3, not the thesis' 32^3): docs/ebslam_core.md#voxel-map
 
 #include <array>
 #include <cmath>
