@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "dasp/dasp.h"
@@ -73,6 +74,80 @@ inline RgbdFrame slantedPlane(int width, int height, float centre_m, float angle
       frame.depth.at<float>(y, x) = d / (nx * rx + nz);
     }
   }
+  return frame;
+}
+
+/// Depth (uint16 millimetres) of the plane n . P = offset_m seen through `intrinsics`, n unit.
+inline float planeDepthMm(const Intrinsics& k, int x, int y, const Eigen::Vector3f& n,
+                          float offset_m) {
+  const Eigen::Vector3f ray((x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0f);
+  return 1000.0f * offset_m / n.dot(ray);
+}
+
+/// Colour `base` (BGR) with mild deterministic noise of +-3 per channel.
+inline cv::Vec3b noisyColor(const cv::Vec3b& base, cv::RNG& rng) {
+  cv::Vec3b c;
+  for (int i = 0; i < 3; ++i) c[i] = cv::saturate_cast<std::uint8_t>(base[i] + rng.uniform(-3, 4));
+  return c;
+}
+
+/// A table seen from above at 1 m, tilted by 30 degrees, 320x240: light grey-beige, and on it a
+/// thin flat object (a book or a mat, `thickness_m` thick, default 3 mm) in dark blue over the
+/// image rectangle columns 110-209, rows 80-159 (`object_mask` marks it). Depth in millimetres
+/// (quantised like a Kinect's), so the object's depth step is a few quanta: the colour edge must
+/// carry its boundary.
+inline RgbdFrame thinObjectOnTable(cv::Mat* object_mask, float thickness_m = 0.003f) {
+  const int width = 320, height = 240;
+  RgbdFrame frame;
+  frame.intrinsics = syntheticIntrinsics(width, height);
+  frame.color = cv::Mat(height, width, CV_8UC3);
+  frame.depth = cv::Mat(height, width, CV_16UC1);
+  const float tilt = 30.0f * 3.14159265f / 180.0f;
+  const Eigen::Vector3f n(0.0f, -std::sin(tilt), std::cos(tilt));  // towards +z, table normal
+  const cv::Rect object(110, 80, 100, 80);
+  cv::RNG rng(7);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const bool on = object.contains(cv::Point(x, y));
+      frame.color.at<cv::Vec3b>(y, x) =
+          noisyColor(on ? cv::Vec3b(150, 90, 70) : cv::Vec3b(150, 170, 185), rng);
+      frame.depth.at<std::uint16_t>(y, x) = cv::saturate_cast<std::uint16_t>(
+          planeDepthMm(frame.intrinsics, x, y, n, 1.0f - (on ? thickness_m : 0.0f)));
+    }
+  }
+  if (object_mask != nullptr) {
+    *object_mask = cv::Mat::zeros(height, width, CV_8UC1);
+    (*object_mask)(object).setTo(255);
+  }
+  return frame;
+}
+
+/// A cluster of four touching boxes in front of a wall, 320x240: the boxes' front faces are
+/// fronto-parallel at 0.90, 0.92, 0.91 and 0.93 m (steps of 1-2 cm where they touch), coloured
+/// red, yellow, green and blue; the wall at 1.3 m, grey. `box_labels` (CV_32SC1) gets 1-4 per
+/// box, 0 for the wall. Box k covers columns 40 + 60 k .. 99 + 60 k, rows 60-179.
+inline RgbdFrame touchingBoxes(cv::Mat* box_labels) {
+  const int width = 320, height = 240;
+  RgbdFrame frame;
+  frame.intrinsics = syntheticIntrinsics(width, height);
+  frame.color = cv::Mat(height, width, CV_8UC3);
+  frame.depth = cv::Mat(height, width, CV_16UC1);
+  const float depth_m[4] = {0.90f, 0.92f, 0.91f, 0.93f};
+  const cv::Vec3b colors[4] = {cv::Vec3b(60, 60, 170), cv::Vec3b(60, 170, 180),
+                               cv::Vec3b(80, 150, 70), cv::Vec3b(170, 90, 60)};
+  cv::Mat labels(height, width, CV_32SC1, cv::Scalar(0));
+  cv::RNG rng(11);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int box = (y >= 60 && y < 180 && x >= 40 && x < 280) ? (x - 40) / 60 : -1;
+      labels.at<int>(y, x) = box + 1;
+      frame.color.at<cv::Vec3b>(y, x) =
+          noisyColor(box >= 0 ? colors[box] : cv::Vec3b(128, 128, 128), rng);
+      frame.depth.at<std::uint16_t>(y, x) =
+          static_cast<std::uint16_t>(1000.0f * (box >= 0 ? depth_m[box] : 1.3f));
+    }
+  }
+  if (box_labels != nullptr) *box_labels = labels;
   return frame;
 }
 

@@ -304,5 +304,103 @@ TEST(Sdasp, TwoObjectsGiveTwoSegments) {
   EXPECT_EQ(metrics::countSegments(segments, cv::Mat()), 2u);
 }
 
+// Majority segment of the labelled pixels where `region` is non-zero, and its share of them.
+int majoritySegment(const cv::Mat& segments, const cv::Mat& region, double* share) {
+  std::map<int, int> votes;
+  int total = 0;
+  for (int y = 0; y < segments.rows; ++y) {
+    for (int x = 0; x < segments.cols; ++x) {
+      const int s = segments.at<int>(y, x);
+      if (s < 0 || region.at<std::uint8_t>(y, x) == 0) continue;
+      ++votes[s];
+      ++total;
+    }
+  }
+  int best = -1, best_count = 0;
+  for (const auto& [s, c] : votes) {
+    if (c > best_count) best = s, best_count = c;
+  }
+  *share = total == 0 ? 0.0 : static_cast<double>(best_count) / total;
+  return best;
+}
+
+// s-DASP at the library defaults (DASP K = 300, seed 0, then SdaspConfig{}).
+cv::Mat sdaspSegments(const RgbdFrame& frame, const SdaspConfig& config = {}) {
+  DaspConfig dasp_config;
+  dasp_config.superpixel_count = 300;
+  const Superpixels sp = computeDasp(frame, dasp_config);
+  const WeightedGraph ucg = ultrametricContourGraph(sp, config);
+  return segmentPixels(sp.labels, segmentGraph(ucg, cutThreshold(ucg, config)));
+}
+
+TEST(Sdasp, ThinFlatObjectOnATableIsItsOwnSegment) {
+  // A 3 mm thin dark object on a light table: the depth step is 3 quanta, the colour edge must
+  // carry the boundary (the colour term of eq. 4.19 against the position and normal terms).
+  cv::Mat object;
+  const RgbdFrame frame = test::thinObjectOnTable(&object);
+  const cv::Mat segments = sdaspSegments(frame);
+  double object_share = 0.0, table_share = 0.0;
+  const int object_segment = majoritySegment(segments, object, &object_share);
+  const int table_segment = majoritySegment(segments, object == 0, &table_share);
+  EXPECT_NE(object_segment, table_segment);
+  EXPECT_GT(object_share, 0.9);
+  EXPECT_GT(table_share, 0.9);
+}
+
+TEST(Sdasp, TouchingBoxesAreSeparateSegments) {
+  // Four boxes side by side, front faces 1-2 cm apart in depth, each its own colour, before a
+  // wall: every box and the wall must be a segment of its own.
+  cv::Mat boxes;
+  const RgbdFrame frame = test::touchingBoxes(&boxes);
+  const cv::Mat segments = sdaspSegments(frame);
+  std::set<int> seen;
+  for (int box = 0; box <= 4; ++box) {
+    double share = 0.0;
+    const int segment = majoritySegment(segments, boxes == box, &share);
+    EXPECT_GT(share, 0.9) << "box " << box;
+    EXPECT_TRUE(seen.insert(segment).second) << "box " << box << " shares a segment";
+  }
+}
+
+TEST(Sdasp, CutThresholdFollowsTheRule) {
+  // A path 0-1-2-3-4 with weights 0.01, 0.02, 0.03, 0.4 and a chord 0-2 of 0.5 that is not in
+  // the minimum spanning tree: merge levels 0.01, 0.02, 0.03, 0.4.
+  WeightedGraph graph;
+  graph.node_count = 5;
+  graph.edges = {{0, 1, 0.01f}, {0, 2, 0.5f}, {1, 2, 0.02f}, {2, 3, 0.03f}, {3, 4, 0.4f}};
+  EXPECT_EQ(spanningMergeLevels(graph), (std::vector<float>{0.01f, 0.02f, 0.03f, 0.4f}));
+  SdaspConfig config;
+  config.cut = CutRule::kGlobal;
+  config.threshold = 0.123f;
+  EXPECT_FLOAT_EQ(cutThreshold(graph, config), 0.123f);
+  config.cut = CutRule::kAdaptive;
+  config.adaptive_scale = 2.0f;
+  config.adaptive_quantile = 0.5f;  // between 0.02 and 0.03: 0.025
+  config.adaptive_max_threshold = 1.0f;
+  EXPECT_NEAR(cutThreshold(graph, config), 0.05f, 1e-6f);
+  config.adaptive_quantile = 0.0f;
+  EXPECT_NEAR(cutThreshold(graph, config), 0.02f, 1e-6f);
+  config.adaptive_quantile = 1.0f;  // 2 x 0.4, capped
+  config.adaptive_max_threshold = 0.25f;
+  EXPECT_FLOAT_EQ(cutThreshold(graph, config), 0.25f);
+  // The cut the rule picks splits the graph at the weak link only.
+  config.adaptive_quantile = 0.5f;
+  const std::vector<int> nodes = segmentGraph(graph, cutThreshold(graph, config));
+  EXPECT_EQ(nodes, (std::vector<int>{0, 0, 0, 0, 1}));
+  // No edges: the upper bound.
+  EXPECT_FLOAT_EQ(cutThreshold(WeightedGraph{3, {}}, config), 0.25f);
+  config.adaptive_scale = 0.0f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.adaptive_scale = 2.0f;
+  config.adaptive_quantile = 1.5f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.adaptive_quantile = 0.5f;
+  config.adaptive_max_threshold = 0.0f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.cut = CutRule::kGlobal;
+  config.threshold = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace dasp
