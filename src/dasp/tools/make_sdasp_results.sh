@@ -32,7 +32,8 @@ grid() {  # grid <json> <evaluate arguments...>: skipped with REUSE_GRIDS=1 when
 # settings x (every threshold of the curve | a grid of the adaptive cut's numbers).
 grid grid_sdasp.json --methods sDASP --color-weight 2,4,8 --position-weight 1,2 \
   --normal-weight 4,8,16 --eigenvectors 16,32 --adaptive-scale 4,5,6,7,8,10 \
-  --adaptive-quantile 0.5,0.75,0.9 --adaptive-max-threshold 0.15,0.2,0.25,0.3 --thresholds 101
+  --adaptive-quantile 0.5,0.75,0.9 \
+  --adaptive-max-threshold 0.08,0.1,0.12,0.15,0.2,0.25,0.3 --thresholds 101
 grid grid_sslic.json --methods sSLIC,sSLICvalid --color-weight 2,4,8,16,32,64 \
   --eigenvectors 8,16,32 --thresholds 101
 # PCL LCCP with the example's parameters, three supervoxel sizes, without and with -tvoxel.
@@ -42,7 +43,7 @@ grid lccp_tvoxel.json --methods LCCP --lccp-seed-resolutions 0.015,0.02,0.03 \
 # Cross-validated choice (5 folds by frame index mod 5; even/odd both ways) of every method.
 /usr/bin/python3 "${REPO}/src/dasp/tools/sdasp_crossval.py" "${EVAL}/grid_sdasp.json" \
   "${EVAL}/grid_sslic.json" "${EVAL}/lccp.json" "${EVAL}/lccp_tvoxel.json" \
-  --json "${EVAL}/crossval.json" | tee "${EVAL}/crossval.txt"
+  --min-color-weight 4 --json "${EVAL}/crossval.json" | tee "${EVAL}/crossval.txt"
 # Adaptive against global cut: five repetitions, interleaved at random, medians.
 "${BUILD}/dasp_sdasp_bench" --benchmark_min_time=1 --benchmark_repetitions=5 \
   --benchmark_enable_random_interleaving=true --benchmark_color=false | tee "${EVAL}/bench.txt"
@@ -84,7 +85,7 @@ rm -f "${EVAL}/worst/"*.png
 WORST=$(/usr/bin/python3 - "${EVAL}" <<'PY'
 import json, sys
 cv = json.load(open(sys.argv[1] + "/crossval.json"))
-f = cv["families"]["sDASP adaptive"]["crossval"]["5 folds (frame index mod 5)"]["frame_f1"]
+f = cv["families"]["sDASP adaptive lambda_c>=4"]["crossval"]["5 folds (frame index mod 5)"]["frame_f1"]
 print(" ".join(cv["frames"][i] for i in sorted(range(len(f)), key=lambda i: f[i])[:3]))
 PY
 )

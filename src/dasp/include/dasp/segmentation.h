@@ -75,7 +75,9 @@ enum class CutRule {
 
 /// The superpixel graph of s-DASP: SuperpixelGraphConfig with heavier colour and normal terms
 /// (lambda_c 4, lambda_n 8; eq. 4.17-4.21), chosen by 5-fold cross-validation over the 45 OSD
-/// learn frames (docs/results/sdasp.md). SuperpixelGraphConfig's own defaults (t-DASP) stay.
+/// learn frames among the settings with lambda_c >= 4 (with 2 the colour edges of thin objects
+/// and touching boxes are lost, test/sdasp_test.cpp); docs/results/sdasp.md. The defaults of
+/// SuperpixelGraphConfig itself (Dasp's published graph, t-DASP) stay.
 inline SuperpixelGraphConfig sdaspGraphDefaults() {
   SuperpixelGraphConfig graph;
   graph.weight_color = 4.0f;
@@ -94,11 +96,11 @@ struct SdaspConfig {
   float threshold = 0.09f;
   /// kAdaptive: threshold = min(adaptive_max_threshold, adaptive_scale * the adaptive_quantile
   /// quantile of the frame's merge levels) [1]; see adaptiveCutThreshold. > 0.
-  float adaptive_scale = 7.0f;
+  float adaptive_scale = 6.0f;
   /// kAdaptive: quantile in [0, 1] of the merge levels (0.75: the upper quartile).
   float adaptive_quantile = 0.75f;
   /// kAdaptive: upper bound of the threshold [1] (frames with few weak edges). > 0.
-  float adaptive_max_threshold = 0.25f;
+  float adaptive_max_threshold = 0.15f;
 };
 
 /// Merge levels of a graph in ascending order: the weights of the edges of its minimum spanning
