@@ -324,13 +324,20 @@ def main():
     w("## Bench (`dasp_sdasp_bench`, learn0, K = 1000, single-threaded)")
     w("")
     w("```")
+    medians = "_median " in bench
     for line in bench.splitlines():
+        if line.startswith("BM_") and medians and "_median " not in line:
+            continue  # repetitions: the medians only
         if line.startswith(("BM_", "K =", "ratio", "DASP +", "frame:")):
             w(line)
     w("```")
     w("")
-    w("Columns: wall time, CPU time, iterations (wall is about twice the CPU time because four "
-      "jobs shared the two cores during the run; the ratio uses CPU time). Graph = "
+    w("Columns: wall time, CPU time, iterations; medians of 5 repetitions run in random "
+      "interleaved order (wall is above the CPU time because other jobs shared the two cores "
+      "during the run; the ratios use CPU time). `BM_Sdasp` cuts at the default adaptive "
+      "threshold (minimum spanning tree of the contour graph, a quantile of its levels), "
+      "`BM_SdaspGlobalCut` at the one global threshold, as s-DASP did before: the first ratio "
+      "line is their CPU time ratio. Graph = "
       "`buildSuperpixelGraph`, eigen solve = `globalizeEdgeWeights` (k = 16), labelling = "
       "union-find at one threshold + pixel segment image, sweep = node labels at 101 thresholds "
       "in one pass, `BM_Sdasp` = graph + eigen + labelling, `BM_DaspPlusSdasp` = RGB-D frame to "
