@@ -169,7 +169,7 @@ def main():
     w = L.append
     w("# s-DASP image segmentation: results")
     w("")
-    w("Regenerate: `%s` (about 15 minutes on one core; builds `dasp_sdasp` and "
+    w("Regenerate: `%s` (about 30 minutes on one core, 5 with REUSE_GRIDS=1; builds `dasp_sdasp` and "
       "`dasp_sdasp_bench` in /tmp, runs every evaluation below, rewrites this page and its "
       "pictures; `REUSE_GRIDS=1` keeps the grid evaluations of an earlier run). Commit %s, %s." % (args.command, git_commit(os.path.dirname(args.out)),
                                      datetime.date.today().isoformat()))
