@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
         const dasp::WeightedGraph graph = dasp::buildSuperpixelGraph(sp);  // Dasp's edges
         const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, sdasp);
         const cv::Mat segments =
-            dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, sdasp.threshold));
+            dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, dasp::cutThreshold(ucg, sdasp)));
         checksum += graph.edges.size() + static_cast<std::size_t>(segments.rows);
         if (r > 0) dasp_ms += t1 - t0;
       }

@@ -131,8 +131,8 @@ dasp::DaspConfig loadDaspConfig(const ros::NodeHandle& nh) {
   return c;
 }
 
-dasp::SuperpixelGraphConfig loadGraphConfig(const ros::NodeHandle& nh) {
-  dasp::SuperpixelGraphConfig g;
+dasp::SuperpixelGraphConfig loadGraphConfig(const ros::NodeHandle& nh,
+                                            dasp::SuperpixelGraphConfig g = {}) {
   g.min_border_pairs = param<int>(nh, "graph/min_border_pairs", g.min_border_pairs);
   g.weight_color = floatParam(nh, "graph/weight_color", g.weight_color);
   g.weight_position = floatParam(nh, "graph/weight_position", g.weight_position);
@@ -193,14 +193,46 @@ SdaspNodeConfig loadSdaspNodeConfig(const ros::NodeHandle& nh) {
   SdaspNodeConfig config;
   config.queue_size = param<int>(nh, "queue_size", config.queue_size);
   require(config.queue_size >= 1, nh, "queue_size", "must be >= 1");
-  config.sdasp.graph = loadGraphConfig(nh);
+  config.sdasp.graph = loadGraphConfig(nh, config.sdasp.graph);
   config.sdasp.spectral = loadSpectralConfig(nh);
-  config.sdasp.threshold = floatParam(nh, "threshold", config.sdasp.threshold);
-  require(std::isfinite(config.sdasp.threshold), nh, "threshold", "must be finite");
+  dasp::SdaspConfig& s = config.sdasp;
+  const std::string cut = param<std::string>(nh, "cut", cutRuleName(s.cut));
+  try {
+    s.cut = parseCutRule(cut);
+  } catch (const std::invalid_argument&) {
+    require(false, nh, "cut", "= " + cut + " must be adaptive or global");
+  }
+  s.threshold = floatParam(nh, "threshold", s.threshold);
+  s.adaptive_scale = floatParam(nh, "adaptive_scale", s.adaptive_scale);
+  s.adaptive_quantile = floatParam(nh, "adaptive_quantile", s.adaptive_quantile);
+  s.adaptive_max_threshold = floatParam(nh, "adaptive_max_threshold", s.adaptive_max_threshold);
+  const std::string problem = checkSdaspCut(s);
+  if (!problem.empty()) throw std::invalid_argument(problem);
   config.ucm_encoding = param<std::string>(nh, "ucm_encoding", config.ucm_encoding);
   require(config.ucm_encoding == "32FC1" || config.ucm_encoding == "mono8", nh, "ucm_encoding",
           "must be 32FC1 or mono8");
   return config;
+}
+
+dasp::CutRule parseCutRule(const std::string& text) {
+  if (text == "adaptive") return dasp::CutRule::kAdaptive;
+  if (text == "global") return dasp::CutRule::kGlobal;
+  throw std::invalid_argument("cut rule must be adaptive or global, not " + text);
+}
+
+std::string cutRuleName(dasp::CutRule rule) {
+  return rule == dasp::CutRule::kAdaptive ? "adaptive" : "global";
+}
+
+std::string checkSdaspCut(const dasp::SdaspConfig& s) {
+  auto positive = [](float v) { return std::isfinite(v) && v > 0.0f; };
+  if (!std::isfinite(s.threshold)) return "parameter threshold must be finite";
+  if (!positive(s.adaptive_scale)) return "parameter adaptive_scale must be > 0";
+  if (!(s.adaptive_quantile >= 0.0f && s.adaptive_quantile <= 1.0f)) {
+    return "parameter adaptive_quantile must lie in [0, 1]";
+  }
+  if (!positive(s.adaptive_max_threshold)) return "parameter adaptive_max_threshold must be > 0";
+  return "";
 }
 
 TdaspNodeConfig loadTdaspNodeConfig(const ros::NodeHandle& nh) {

@@ -5,13 +5,14 @@
 //   superpixels/labels   sensor_msgs/Image 32SC1 (image_transport)
 // Publications, all with the SuperpixelArray's header:
 //   segmentation         ebslam_msgs/Segmentation (segment id per superpixel, ultrametric contour
-//                        graph, threshold)
+//                        graph, the frame's cut threshold)
 //   segments/labels      sensor_msgs/Image 32SC1, segment id per pixel, -1 = none
 //   segments/overlay     sensor_msgs/Image bgr8: superpixel mean colours, segment boundaries red
 //   (lazy) segments/ucm         sensor_msgs/Image 32FC1 merge levels or mono8 (~ucm_encoding)
 //   (lazy)
-// The segments are the core's: dasp::ultrametricContourGraph, then dasp::segmentGraph at the
-// threshold, on the superpixels rebuilt from the messages (float fields travel unchanged).
+// The segments are the core's: dasp::ultrametricContourGraph, then dasp::segmentGraph at
+// dasp::cutThreshold (~cut adaptive: per frame from its merge levels, the default; global:
+// ~threshold), on the superpixels rebuilt from the messages (float fields travel unchanged).
 #include <dasp/segmentation.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -67,7 +68,28 @@ class SdaspNodelet : public nodelet::Nodelet {
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SdaspNodeletConfig>>(pnh);
     reconfigure_->setCallback([this](SdaspNodeletConfig& c, uint32_t) {
       std::lock_guard<std::mutex> lock(mutex_);
-      config_.sdasp.threshold = static_cast<float>(c.threshold);
+      dasp::SdaspConfig next = config_.sdasp;
+      next.threshold = static_cast<float>(c.threshold);
+      next.adaptive_scale = static_cast<float>(c.adaptive_scale);
+      next.adaptive_quantile = static_cast<float>(c.adaptive_quantile);
+      next.adaptive_max_threshold = static_cast<float>(c.adaptive_max_threshold);
+      std::string problem;
+      try {
+        next.cut = parseCutRule(c.cut);
+        problem = checkSdaspCut(next);
+      } catch (const std::invalid_argument& e) {
+        problem = e.what();
+      }
+      if (problem.empty()) {
+        config_.sdasp = next;
+        return;
+      }
+      NODELET_WARN("reconfigure refused, the cut stays as it was: %s", problem.c_str());
+      c.cut = cutRuleName(config_.sdasp.cut);
+      c.threshold = config_.sdasp.threshold;
+      c.adaptive_scale = config_.sdasp.adaptive_scale;
+      c.adaptive_quantile = config_.sdasp.adaptive_quantile;
+      c.adaptive_max_threshold = config_.sdasp.adaptive_max_threshold;
     });
     updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
     updater_->setHardwareID("none");
@@ -95,6 +117,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     last_stamp_ = header.stamp;
     dasp::Superpixels superpixels;
     dasp::WeightedGraph ucg;
+    float threshold = 0.0f;
     std::vector<int> node_segments;
     cv::Mat segments;
     try {
@@ -112,7 +135,8 @@ class SdaspNodelet : public nodelet::Nodelet {
     }
     try {
       ucg = dasp::ultrametricContourGraph(superpixels, config_.sdasp);
-      node_segments = dasp::segmentGraph(ucg, config_.sdasp.threshold);
+      threshold = dasp::cutThreshold(ucg, config_.sdasp);
+      node_segments = dasp::segmentGraph(ucg, threshold);
       segments = dasp::segmentPixels(superpixels.labels, node_segments);
     } catch (const std::invalid_argument& e) {
       reject(array_topic_ + ": " + e.what());
@@ -122,7 +146,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     segmentation.header = header;
     segmentation.segment_ids.assign(node_segments.begin(), node_segments.end());
     segmentation.ultrametric = toEdgeMsgs(ucg);
-    segmentation.threshold = config_.sdasp.threshold;
+    segmentation.threshold = threshold;
     segmentation_pub_.publish(
         boost::make_shared<ebslam_msgs::Segmentation>(std::move(segmentation)));
     labels_pub_.publish(boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(segments, header)));
@@ -142,6 +166,7 @@ class SdaspNodelet : public nodelet::Nodelet {
       }
     }
     ++processed_;
+    last_threshold_ = threshold;
     last_segments_ = node_segments.empty()
                          ? 0
                          : static_cast<std::size_t>(
@@ -166,7 +191,8 @@ class SdaspNodelet : public nodelet::Nodelet {
     status.add("frames rejected", rejected_);
     status.add("last rejection", last_error_);
     status.add("segments in the last frame", last_segments_);
-    status.add("threshold", config_.sdasp.threshold);
+    status.add("cut", cutRuleName(config_.sdasp.cut));
+    status.add("threshold in the last frame", last_threshold_);
   }
 
   SdaspNodeConfig config_;
@@ -185,6 +211,7 @@ class SdaspNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   ros::Time last_stamp_;
   std::size_t processed_ = 0, rejected_ = 0, last_segments_ = 0;
+  float last_threshold_ = 0.0f;
   std::string last_error_;
 };
 

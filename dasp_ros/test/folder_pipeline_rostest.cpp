@@ -71,6 +71,7 @@ TEST(FolderPipeline, LabelsEqualTheCoreLibraryFrameByFrame) {
   }
   std::lock_guard<std::mutex> lock(mutex);
   const dasp::SdaspConfig sdasp;
+  ASSERT_EQ(sdasp.cut, dasp::CutRule::kAdaptive);  // the Sdasp default: the per-frame cut
   for (int i = 0; i < frames; ++i) {
     SCOPED_TRACE(paths[static_cast<std::size_t>(i)].name);
     ASSERT_EQ(complete.count(static_cast<uint32_t>(i)), 1u)
@@ -78,9 +79,9 @@ TEST(FolderPipeline, LabelsEqualTheCoreLibraryFrameByFrame) {
     const uint32_t seq = complete[static_cast<uint32_t>(i)];
     const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths[static_cast<std::size_t>(i)]);
     const dasp::Superpixels expected = dasp::computeDasp(frame, dasp::DaspConfig{});
+    const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(expected, sdasp);
     const cv::Mat segments = dasp::segmentPixels(
-        expected.labels,
-        dasp::segmentGraph(dasp::ultrametricContourGraph(expected, sdasp), sdasp.threshold));
+        expected.labels, dasp::segmentGraph(ucg, dasp::cutThreshold(ucg, sdasp)));
     EXPECT_EQ(superpixel_labels[seq].header.frame_id, "camera_rgb_optical_frame");
     EXPECT_EQ(segment_labels[seq].header.frame_id, "camera_rgb_optical_frame");
     // Every message of this frame, from any loop of the folder: the nodes keep state across

@@ -220,8 +220,10 @@ TEST_F(SegmentationNodes, OutputsEqualTheCoreLibraryWithInputStampAndFrame) {
   const dasp::Superpixels expected = dasp::computeDasp(frame_, dasp::DaspConfig{});
   const dasp::WeightedGraph graph = dasp::buildSuperpixelGraph(expected);
   const dasp::SdaspConfig sdasp;
+  ASSERT_EQ(sdasp.cut, dasp::CutRule::kAdaptive);  // the default: the per-frame cut
   const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(expected, sdasp);
-  const std::vector<int> node_segments = dasp::segmentGraph(ucg, sdasp.threshold);
+  const float threshold = dasp::cutThreshold(ucg, sdasp);
+  const std::vector<int> node_segments = dasp::segmentGraph(ucg, threshold);
   const cv::Mat segments = dasp::segmentPixels(expected.labels, node_segments);
 
   std::lock_guard<std::mutex> lock(out_.mutex);
@@ -261,7 +263,8 @@ TEST_F(SegmentationNodes, OutputsEqualTheCoreLibraryWithInputStampAndFrame) {
   EXPECT_EQ(segmentation.segment_ids,
             std::vector<int32_t>(node_segments.begin(), node_segments.end()));
   EXPECT_TRUE(segmentation.strand_ids.empty());
-  EXPECT_FLOAT_EQ(segmentation.threshold, sdasp.threshold);
+  EXPECT_FLOAT_EQ(segmentation.threshold, threshold);
+  EXPECT_LE(segmentation.threshold, sdasp.adaptive_max_threshold);
   ASSERT_EQ(segmentation.ultrametric.size(), ucg.edges.size());
   for (std::size_t i = 0; i < ucg.edges.size(); ++i) {
     EXPECT_EQ(segmentation.ultrametric[i].weight, ucg.edges[i].weight);
@@ -456,6 +459,10 @@ TEST_F(SegmentationNodes, ZDynamicReconfigureChangesTheNextFrame) {
   threshold.name = "threshold";
   threshold.value = 0.3;
   sdasp_request.request.config.doubles.push_back(threshold);
+  dynamic_reconfigure::StrParameter cut;
+  cut.name = "cut";
+  cut.value = "global";
+  sdasp_request.request.config.strs.push_back(cut);
   ASSERT_TRUE(ros::service::call("/camera/sdasp/set_parameters", sdasp_request));
 
   publishGood(30.0);
@@ -465,6 +472,7 @@ TEST_F(SegmentationNodes, ZDynamicReconfigureChangesTheNextFrame) {
   config.superpixel_count = 300;
   const dasp::Superpixels expected = dasp::computeDasp(frame_, config);
   dasp::SdaspConfig sdasp;
+  sdasp.cut = dasp::CutRule::kGlobal;
   sdasp.threshold = 0.3f;
   const std::vector<int> node_segments =
       dasp::segmentGraph(dasp::ultrametricContourGraph(expected, sdasp), sdasp.threshold);

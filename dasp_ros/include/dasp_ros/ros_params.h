@@ -59,7 +59,9 @@ struct DaspNodeConfig {
 /// Parameters of dasp_ros/Sdasp.
 struct SdaspNodeConfig {
   int queue_size = 5;  ///< ~queue_size
-  /// ~graph/..., ~spectral/eigenvector_count, ~threshold [1]
+  /// ~graph/..., ~spectral/eigenvector_count, ~cut (adaptive|global), ~threshold [1] (global
+  /// cut), ~adaptive_scale, ~adaptive_quantile, ~adaptive_max_threshold [1] (adaptive cut); the
+  /// cut parameters are also dynamic_reconfigure parameters (cfg/SdaspNodelet.cfg).
   dasp::SdaspConfig sdasp;
   /// ~ucm_encoding: "32FC1" (merge level; -1 off boundaries, +inf never merged) or "mono8"
   /// (255 (1 - sqrt(min(level, 1))): dark strokes on white, as dasp_sdasp draws it)
@@ -93,6 +95,15 @@ OpenNi2SourceConfig loadOpenNi2SourceConfig(const ros::NodeHandle& private_nh);
 DaspNodeConfig loadDaspNodeConfig(const ros::NodeHandle& private_nh);
 SdaspNodeConfig loadSdaspNodeConfig(const ros::NodeHandle& private_nh);
 TdaspNodeConfig loadTdaspNodeConfig(const ros::NodeHandle& private_nh);
+
+/// "adaptive" -> kAdaptive, "global" -> kGlobal; throws std::invalid_argument otherwise.
+dasp::CutRule parseCutRule(const std::string& text);
+std::string cutRuleName(dasp::CutRule rule);
+
+/// The one check of Sdasp's cut parameters (at start and on every reconfigure): "" when valid,
+/// otherwise what is wrong. threshold finite, adaptive_scale > 0, adaptive_quantile in [0, 1],
+/// adaptive_max_threshold > 0.
+std::string checkSdaspCut(const dasp::SdaspConfig& sdasp);
 
 /// "count" -> kCount, "radius" -> kRadius; throws std::invalid_argument otherwise.
 dasp::SizeMode parseSizeMode(const std::string& text);

@@ -93,16 +93,29 @@ void BM_SdaspUcmImage(benchmark::State& state) {
 }
 BENCHMARK(BM_SdaspUcmImage)->Unit(benchmark::kMillisecond);
 
-// s-DASP after the superpixels: graph, eigen solve, labelling.
+// s-DASP after the superpixels: graph, eigen solve, cut threshold (the default adaptive rule),
+// labelling.
 void BM_Sdasp(benchmark::State& state) {
   const SdaspConfig config;
+  for (auto _ : state) {
+    const WeightedGraph ucg = ultrametricContourGraph(superpixels(), config);
+    benchmark::DoNotOptimize(
+        segmentPixels(superpixels().labels, segmentGraph(ucg, cutThreshold(ucg, config))));
+  }
+}
+BENCHMARK(BM_Sdasp)->Unit(benchmark::kMillisecond);
+
+// The same with the one global threshold (the s-DASP of before the per-frame cut).
+void BM_SdaspGlobalCut(benchmark::State& state) {
+  SdaspConfig config;
+  config.cut = CutRule::kGlobal;
   for (auto _ : state) {
     const WeightedGraph ucg = ultrametricContourGraph(superpixels(), config);
     benchmark::DoNotOptimize(
         segmentPixels(superpixels().labels, segmentGraph(ucg, config.threshold)));
   }
 }
-BENCHMARK(BM_Sdasp)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SdaspGlobalCut)->Unit(benchmark::kMillisecond);
 
 // DASP + s-DASP from the RGB-D frame to the segment image.
 void BM_DaspPlusSdasp(benchmark::State& state) {
@@ -110,7 +123,7 @@ void BM_DaspPlusSdasp(benchmark::State& state) {
   for (auto _ : state) {
     const Superpixels s = computeDasp(bench::benchFrame(), daspConfig());
     const WeightedGraph ucg = ultrametricContourGraph(s, config);
-    benchmark::DoNotOptimize(segmentPixels(s.labels, segmentGraph(ucg, config.threshold)));
+    benchmark::DoNotOptimize(segmentPixels(s.labels, segmentGraph(ucg, cutThreshold(ucg, config))));
   }
 }
 BENCHMARK(BM_DaspPlusSdasp)->Unit(benchmark::kMillisecond);
@@ -130,8 +143,11 @@ class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
+      // One run: its time; with --benchmark_repetitions: the median (BM_x_median).
       if (run.run_type == Run::RT_Iteration && run.iterations > 0) {
-        cpu_ms[run.benchmark_name()] = run.GetAdjustedCPUTime();
+        cpu_ms.emplace(run.benchmark_name(), run.GetAdjustedCPUTime());
+      } else if (run.run_type == Run::RT_Aggregate && run.aggregate_name == "median") {
+        cpu_ms[run.run_name.function_name] = run.GetAdjustedCPUTime();
       }
     }
     ConsoleReporter::ReportRuns(runs);
@@ -152,7 +168,11 @@ int main(int argc, char** argv) {
     return it == reporter.cpu_ms.end() ? -1.0 : it->second;
   };
   const double total = find("BM_DaspPlusSdasp"), slic = find("BM_OpenCvSlic");
-  const double sdasp = find("BM_Sdasp");
+  const double sdasp = find("BM_Sdasp"), global_cut = find("BM_SdaspGlobalCut");
+  if (sdasp > 0 && global_cut > 0) {
+    std::printf("ratio s-DASP adaptive cut / global cut, single-threaded CPU time: %.3f\n",
+                sdasp / global_cut);
+  }
   if (total > 0 && slic > 0) {
     std::printf(
         "ratio DASP + s-DASP / OpenCV SLIC, single-threaded CPU time: %.3f (%.2f ms / %.2f ms)\n",

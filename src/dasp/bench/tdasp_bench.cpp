@@ -105,7 +105,8 @@ void BM_SdaspFrame(benchmark::State& state) {
   for (auto _ : state) {
     const Superpixels sp = computeDasp(f, dc);
     const WeightedGraph ucg = ultrametricContourGraph(sp);
-    const cv::Mat segments = segmentPixels(sp.labels, segmentGraph(ucg, SdaspConfig{}.threshold));
+    const cv::Mat segments =
+        segmentPixels(sp.labels, segmentGraph(ucg, cutThreshold(ucg, SdaspConfig{})));
     benchmark::DoNotOptimize(segments.data);
   }
 }

@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numeric>
@@ -308,6 +309,49 @@ WeightedGraph ultrametricContourGraph(const Superpixels& superpixels, const Sdas
   const std::vector<float> global = globalizeEdgeWeights(ucg, config.spectral);
   for (std::size_t k = 0; k < ucg.edges.size(); ++k) ucg.edges[k].weight = global[k];
   return ucg;
+}
+
+std::vector<float> spanningMergeLevels(const WeightedGraph& graph) {
+  checkGraph(graph, "spanningMergeLevels");
+  std::vector<float> levels;
+  levels.reserve(static_cast<std::size_t>(std::max(0, graph.node_count - 1)));
+  UnionFind sets(graph.node_count);
+  for (const std::size_t k : edgesByWeight(graph)) {
+    if (sets.unite(graph.edges[k].a, graph.edges[k].b)) levels.push_back(graph.edges[k].weight);
+  }
+  return levels;  // ascending: Kruskal takes the edges in weight order
+}
+
+float adaptiveCutThreshold(const WeightedGraph& ucg, float scale, float quantile,
+                           float max_threshold) {
+  if (!(scale > 0.0f) || !std::isfinite(scale)) {
+    throw std::invalid_argument("adaptiveCutThreshold: scale must be a positive number");
+  }
+  if (!(quantile >= 0.0f && quantile <= 1.0f)) {
+    throw std::invalid_argument("adaptiveCutThreshold: quantile must lie in [0, 1]");
+  }
+  if (!(max_threshold > 0.0f)) {
+    throw std::invalid_argument("adaptiveCutThreshold: max_threshold must be positive");
+  }
+  const std::vector<float> levels = spanningMergeLevels(ucg);
+  if (levels.empty()) return max_threshold;
+  const double position = static_cast<double>(quantile) * static_cast<double>(levels.size() - 1);
+  const std::size_t below = static_cast<std::size_t>(position);
+  const std::size_t above = std::min(below + 1, levels.size() - 1);
+  const double fraction = position - static_cast<double>(below);
+  const double q = (1.0 - fraction) * levels[below] + fraction * levels[above];
+  return static_cast<float>(std::min<double>(max_threshold, scale * q));
+}
+
+float cutThreshold(const WeightedGraph& ucg, const SdaspConfig& config) {
+  if (config.cut == CutRule::kAdaptive) {
+    return adaptiveCutThreshold(ucg, config.adaptive_scale, config.adaptive_quantile,
+                                config.adaptive_max_threshold);
+  }
+  if (!std::isfinite(config.threshold)) {
+    throw std::invalid_argument("cutThreshold: threshold must be finite");
+  }
+  return config.threshold;
 }
 
 }  // namespace dasp

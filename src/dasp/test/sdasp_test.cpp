@@ -304,5 +304,102 @@ TEST(Sdasp, TwoObjectsGiveTwoSegments) {
   EXPECT_EQ(metrics::countSegments(segments, cv::Mat()), 2u);
 }
 
+// Majority segment of the labelled pixels where `region` is non-zero, and its share of them.
+int majoritySegment(const cv::Mat& segments, const cv::Mat& region, double* share) {
+  std::map<int, int> votes;
+  int total = 0;
+  for (int y = 0; y < segments.rows; ++y) {
+    for (int x = 0; x < segments.cols; ++x) {
+      const int s = segments.at<int>(y, x);
+      if (s < 0 || region.at<std::uint8_t>(y, x) == 0) continue;
+      ++votes[s];
+      ++total;
+    }
+  }
+  int best = -1, best_count = 0;
+  for (const auto& [s, c] : votes) {
+    if (c > best_count) best = s, best_count = c;
+  }
+  *share = total == 0 ? 0.0 : static_cast<double>(best_count) / total;
+  return best;
+}
+
+// s-DASP at the library defaults (DASP K = 1000, seed 0, then SdaspConfig{}).
+cv::Mat sdaspSegments(const RgbdFrame& frame, const SdaspConfig& config = {}) {
+  DaspConfig dasp_config;
+  dasp_config.superpixel_count = 1000;
+  const Superpixels sp = computeDasp(frame, dasp_config);
+  const WeightedGraph ucg = ultrametricContourGraph(sp, config);
+  return segmentPixels(sp.labels, segmentGraph(ucg, cutThreshold(ucg, config)));
+}
+
+// Every labelled region 1..regions of `labels` has a majority segment of its own holding more
+// than 90 % of its pixels.
+void expectOneSegmentPerRegion(const cv::Mat& segments, const cv::Mat& labels, int regions) {
+  std::set<int> seen;
+  for (int region = 1; region <= regions; ++region) {
+    double share = 0.0;
+    const int segment = majoritySegment(segments, labels == region, &share);
+    EXPECT_GT(share, 0.9) << "region " << region;
+    EXPECT_TRUE(seen.insert(segment).second) << "region " << region << " shares a segment";
+  }
+}
+
+TEST(Sdasp, ThinFlatObjectOnATableIsItsOwnSegment) {
+  // A 3 mm thin mat on a table (OSD-like frame, 640x480): its depth step is 3 quanta, so the
+  // colour edge (eq. 4.19) must carry the boundary; a box stands beside it.
+  cv::Mat labels;
+  const RgbdFrame frame = test::thinObjectOnTable(&labels);
+  expectOneSegmentPerRegion(sdaspSegments(frame), labels, 3);
+}
+
+TEST(Sdasp, TouchingBoxesAreSeparateSegments) {
+  // Four boxes of four colours in a touching 2 x 2 cluster on the table: every box and the table
+  // a segment of its own.
+  cv::Mat labels;
+  const RgbdFrame frame = test::touchingBoxes(&labels);
+  expectOneSegmentPerRegion(sdaspSegments(frame), labels, 5);
+}
+
+TEST(Sdasp, CutThresholdFollowsTheRule) {
+  // A path 0-1-2-3-4 with weights 0.01, 0.02, 0.03, 0.4 and a chord 0-2 of 0.5 that is not in
+  // the minimum spanning tree: merge levels 0.01, 0.02, 0.03, 0.4.
+  WeightedGraph graph;
+  graph.node_count = 5;
+  graph.edges = {{0, 1, 0.01f}, {0, 2, 0.5f}, {1, 2, 0.02f}, {2, 3, 0.03f}, {3, 4, 0.4f}};
+  EXPECT_EQ(spanningMergeLevels(graph), (std::vector<float>{0.01f, 0.02f, 0.03f, 0.4f}));
+  SdaspConfig config;
+  config.cut = CutRule::kGlobal;
+  config.threshold = 0.123f;
+  EXPECT_FLOAT_EQ(cutThreshold(graph, config), 0.123f);
+  config.cut = CutRule::kAdaptive;
+  config.adaptive_scale = 2.0f;
+  config.adaptive_quantile = 0.5f;  // between 0.02 and 0.03: 0.025
+  config.adaptive_max_threshold = 1.0f;
+  EXPECT_NEAR(cutThreshold(graph, config), 0.05f, 1e-6f);
+  config.adaptive_quantile = 0.0f;
+  EXPECT_NEAR(cutThreshold(graph, config), 0.02f, 1e-6f);
+  config.adaptive_quantile = 1.0f;  // 2 x 0.4, capped
+  config.adaptive_max_threshold = 0.25f;
+  EXPECT_FLOAT_EQ(cutThreshold(graph, config), 0.25f);
+  // The cut the rule picks splits the graph at the weak link only.
+  config.adaptive_quantile = 0.5f;
+  const std::vector<int> nodes = segmentGraph(graph, cutThreshold(graph, config));
+  EXPECT_EQ(nodes, (std::vector<int>{0, 0, 0, 0, 1}));
+  // No edges: the upper bound.
+  EXPECT_FLOAT_EQ(cutThreshold(WeightedGraph{3, {}}, config), 0.25f);
+  config.adaptive_scale = 0.0f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.adaptive_scale = 2.0f;
+  config.adaptive_quantile = 1.5f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.adaptive_quantile = 0.5f;
+  config.adaptive_max_threshold = 0.0f;
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+  config.cut = CutRule::kGlobal;
+  config.threshold = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(cutThreshold(graph, config), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace dasp

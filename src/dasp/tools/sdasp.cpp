@@ -3,7 +3,10 @@
 //   evaluate: a folder of frames with object labels (../shared/data/osd/learn layout) ->
 //             boundary precision/recall curves, ODS and OIS F1 and time per frame of s-DASP
 //             (DASP superpixels), s-SLIC (the same segmentation on ASP_RGB superpixels) and PCL's
-//             LCCP, as JSON. Parameter lists (comma separated) run a grid on the same superpixels.
+//             LCCP, as JSON. Parameter lists (comma separated) run a grid on the same superpixels;
+//             the adaptive cut (dasp::adaptiveCutThreshold) is scored for a grid of its
+//             parameters too, and --per-frame writes every frame's counts (for cross-validation,
+//             sdasp_crossval.py).
 // Mask per frame: object label > 0 and depth > 0; boundary F1 at 2 px (dasp/metrics.h).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -154,6 +157,10 @@ struct Curve {
   }
 };
 
+nlohmann::json countsJson(const dasp::BoundaryCounts& c) {
+  return {c.partition_pixels, c.precise_pixels, c.reference_pixels, c.recalled_pixels};
+}
+
 struct Times {
   double superpixels = 0.0, graph = 0.0, eigen = 0.0, labelling = 0.0, ucm = 0.0;
 };
@@ -197,10 +204,10 @@ nlohmann::ordered_json curveJson(const Curve& curve, const std::vector<Times>& t
 }
 
 int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrinsics,
-               const std::string& superpixels_kind, int count, std::uint64_t seed, float threshold,
+               const std::string& superpixels_kind, int count, std::uint64_t seed,
                const dasp::SdaspConfig& config, const std::string& segments_path,
                const std::string& ucm_path, const std::string& labels_path,
-               const std::string& superpixels_path, double scale) {
+               const std::string& superpixels_path, const std::string& overlay_path, double scale) {
   const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, intrinsics);
   double t0 = threadCpuMilliseconds();
   const dasp::Superpixels sp = computeSuperpixels(superpixels_kind, frame, count, seed);
@@ -209,13 +216,15 @@ int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrin
   const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, config);
   const double t_ucg = threadCpuMilliseconds() - t0;
   t0 = threadCpuMilliseconds();
+  const float threshold = dasp::cutThreshold(ucg, config);
   const cv::Mat segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, threshold));
   const double t_label = threadCpuMilliseconds() - t0;
   std::cout << superpixels_kind << ": " << sp.superpixels.size() << " superpixels, "
             << ucg.edges.size() << " edges, " << dasp::metrics::countSegments(segments, cv::Mat())
-            << " segments at threshold " << threshold << "; " << std::fixed << std::setprecision(1)
-            << t_superpixels << " ms superpixels + " << t_ucg << " ms graph and eigen + " << t_label
-            << " ms labelling (thread CPU)\n";
+            << " segments at threshold " << threshold
+            << (config.cut == dasp::CutRule::kAdaptive ? " (adaptive)" : " (global)") << "; "
+            << std::fixed << std::setprecision(1) << t_superpixels << " ms superpixels + " << t_ucg
+            << " ms graph and eigen + " << t_label << " ms labelling (thread CPU)\n";
   if (!segments_path.empty()) writePicture(segments_path, segmentsPicture(segments), scale);
   if (!ucm_path.empty()) {
     writePicture(ucm_path, ucmPicture(dasp::ultrametricContourMap(sp.labels, ucg)), scale);
@@ -224,6 +233,13 @@ int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrin
     cv::Mat picture = frame.color.clone();
     picture.setTo(cv::Scalar(0, 0, 255), dasp::metrics::boundaryMap(sp.labels, cv::Mat()));
     writePicture(superpixels_path, picture, scale);
+  }
+  if (!overlay_path.empty()) {
+    cv::Mat picture = frame.color.clone();
+    cv::Mat boundary = dasp::metrics::boundaryMap(segments, cv::Mat());
+    cv::dilate(boundary, boundary, cv::Mat());  // 3 px strokes, visible at half size
+    picture.setTo(cv::Scalar(0, 0, 255), boundary);
+    writePicture(overlay_path, picture, scale);
   }
   if (!labels_path.empty()) {
     cv::Mat image;
@@ -255,8 +271,8 @@ int main(int argc, char** argv) {
   dasp::RgbdFramePaths paths;
   dasp::Intrinsics intrinsics;
   std::string superpixels_kind = "DASP";
-  float threshold = config.threshold;
-  std::string segments_path, ucm_path, labels_path, superpixels_path;
+  std::string cut_rule = "adaptive";
+  std::string segments_path, ucm_path, labels_path, superpixels_path, overlay_path;
   segment->add_option("--color", paths.color, "8-bit colour PNG")
       ->required()
       ->check(CLI::ExistingFile);
@@ -268,13 +284,26 @@ int main(int argc, char** argv) {
                    "DASP (s-DASP), ASP_RGB (s-SLIC) or ASP_RGB_VALID")
       ->capture_default_str();
   segment
-      ->add_option("-t,--threshold", threshold,
-                   "cut threshold on the normalised UCG weights (edges below it merge)")
+      ->add_option("-t,--threshold", config.threshold,
+                   "global cut threshold on the normalised UCG weights (edges below it merge)")
+      ->capture_default_str();
+  segment->add_option("--cut", cut_rule, "cut rule: adaptive (per frame) or global (--threshold)")
+      ->check(CLI::IsMember({"adaptive", "global"}))
+      ->capture_default_str();
+  segment->add_option("--adaptive-scale", config.adaptive_scale, "adaptive cut: scale")
+      ->capture_default_str();
+  segment->add_option("--adaptive-quantile", config.adaptive_quantile, "adaptive cut: quantile")
+      ->capture_default_str();
+  segment
+      ->add_option("--adaptive-max-threshold", config.adaptive_max_threshold,
+                   "adaptive cut: largest threshold")
       ->capture_default_str();
   segment->add_option("--segments", segments_path, "output PNG: segments in false colours");
   segment->add_option("--ucm", ucm_path, "output PNG: ultrametric contour map (dark = strong)");
   segment->add_option("--superpixel-overlay", superpixels_path,
                       "output PNG: superpixel boundaries over the colour image");
+  segment->add_option("--segment-overlay", overlay_path,
+                      "output PNG: segment boundaries (red) over the colour image");
   segment->add_option("--labels", labels_path, "output 16-bit PNG: segment + 1, 0 = unlabelled");
   double picture_scale = 1.0;
   segment->add_option("--picture-scale", picture_scale, "size of the pictures (1 = frame size)")
@@ -321,6 +350,10 @@ int main(int argc, char** argv) {
   std::string eigen_counts = std::to_string(config.spectral.eigenvector_count);
   std::string thetas = std::to_string(config.graph.min_border_pairs);
   std::string lccp_seeds = "0.015,0.02,0.03";
+  std::string adaptive_scales = std::to_string(config.adaptive_scale);
+  std::string adaptive_quantiles = std::to_string(config.adaptive_quantile);
+  std::string adaptive_caps = std::to_string(config.adaptive_max_threshold);
+  bool per_frame = false;
   evaluate->add_option("--folder", folder, "folder of <name>_rgb/_depth_mm/_label_object.png")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -348,6 +381,14 @@ int main(int argc, char** argv) {
       ->add_option("--lccp-seed-resolutions", lccp_seeds,
                    "LCCP supervoxel seed resolutions in metres (one run each)")
       ->capture_default_str();
+  evaluate->add_option("--adaptive-scale", adaptive_scales, "adaptive cut scale, comma list")
+      ->capture_default_str();
+  evaluate->add_option("--adaptive-quantile", adaptive_quantiles, "adaptive cut quantile, list")
+      ->capture_default_str();
+  evaluate->add_option("--adaptive-max-threshold", adaptive_caps, "adaptive cut upper bound, list")
+      ->capture_default_str();
+  evaluate->add_flag("--per-frame", per_frame,
+                     "write every frame's boundary counts (curve and adaptive cuts)");
   bool lccp_single_camera = false;
   evaluate->add_flag("--lccp-single-camera-transform", lccp_single_camera,
                      "LCCP: depth-dependent voxel grid (PCL example switch -tvoxel)");
@@ -357,8 +398,9 @@ int main(int argc, char** argv) {
   try {
     if (segment->parsed()) {
       paths.name = paths.color;
-      return runSegment(paths, intrinsics, superpixels_kind, count, seed, threshold, config,
-                        segments_path, ucm_path, labels_path, superpixels_path, picture_scale);
+      config.cut = cut_rule == "global" ? dasp::CutRule::kGlobal : dasp::CutRule::kAdaptive;
+      return runSegment(paths, intrinsics, superpixels_kind, count, seed, config, segments_path,
+                        ucm_path, labels_path, superpixels_path, overlay_path, picture_scale);
     }
     if (lccp_cmd->parsed()) {
       paths.name = paths.color;
@@ -405,6 +447,19 @@ int main(int argc, char** argv) {
         }
       }
     }
+    struct AdaptiveSetting {
+      float scale, quantile, cap;
+    };
+    std::vector<AdaptiveSetting> adaptive;
+    for (float sc : parseList<float>(adaptive_scales)) {
+      for (float q : parseList<float>(adaptive_quantiles)) {
+        for (float cap : parseList<float>(adaptive_caps)) adaptive.push_back({sc, q, cap});
+      }
+    }
+    std::vector<std::string> frame_names;
+    for (const dasp::RgbdFramePaths& f : frames) {
+      frame_names.push_back(f.name);
+    }
     const std::vector<std::string> methods = parseList<std::string>(methods_text);
     const std::vector<float> seeds = parseList<float>(lccp_seeds);
 
@@ -416,6 +471,9 @@ int main(int argc, char** argv) {
     out["mask"] = "object label > 0 and depth > 0";
     out["boundary_tolerance_px"] = dasp::metrics::kDefaultBoundaryTolerancePx;
     out["time"] = "thread CPU time per frame, single-threaded, milliseconds";
+    out["frame_files"] = frame_names;
+    out["thresholds"] = thresholds;
+    out["counts"] = "[partition, precise, reference, recalled] boundary pixels";
     out["results"] = nlohmann::ordered_json::array();
 
     for (const std::string& method : methods) {
@@ -427,6 +485,7 @@ int main(int argc, char** argv) {
           dasp::BoundaryCounts total;
           std::vector<Times> times;
           std::vector<double> frame_f1;
+          nlohmann::json lccp_counts = nlohmann::json::array();
           double supervoxels = 0.0, segment_count = 0.0;
           for (const dasp::RgbdFramePaths& f : frames) {
             const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
@@ -447,6 +506,7 @@ int main(int argc, char** argv) {
             const dasp::BoundaryCounts c = dasp::boundaryCurve(ucm, truth, mask, {0.0f}).front();
             total += c;
             frame_f1.push_back(c.f1());
+            lccp_counts.push_back(countsJson(c));
           }
           nlohmann::ordered_json r;
           r["method"] = "LCCP";
@@ -462,6 +522,7 @@ int main(int argc, char** argv) {
           r["mean_frame_f1"] = mean_f1;
           r["time_ms"] = {{"segmentation_total", mean_ms}};
           r["frame_best_f1"] = frame_f1;
+          if (per_frame) r["frame_counts"] = lccp_counts;
           std::cout << "LCCP seed " << seed_resolution << " m: F1 " << std::setprecision(4)
                     << total.f1() << " (P " << total.precision() << ", R " << total.recall()
                     << "), " << std::setprecision(1) << std::fixed << mean_ms << " ms/frame, "
@@ -478,6 +539,11 @@ int main(int argc, char** argv) {
       std::vector<Curve> curves(grid.size());
       std::vector<std::vector<Times>> times(grid.size());
       std::vector<std::vector<double>> frame_f1(grid.size());
+      std::vector<nlohmann::json> curve_counts(grid.size(), nlohmann::json::array());
+      std::vector<nlohmann::json> adaptive_counts(grid.size(), nlohmann::json::array());
+      std::vector<nlohmann::json> adaptive_thresholds(grid.size(), nlohmann::json::array());
+      std::vector<std::vector<dasp::BoundaryCounts>> adaptive_total(
+          grid.size(), std::vector<dasp::BoundaryCounts>(adaptive.size()));
       double superpixel_total = 0.0;
       for (const dasp::RgbdFramePaths& f : frames) {
         const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
@@ -498,7 +564,8 @@ int main(int argc, char** argv) {
           for (std::size_t e = 0; e < global.size(); ++e) ucg.edges[e].weight = global[e];
           t.eigen = threadCpuMilliseconds() - t0;
           t0 = threadCpuMilliseconds();
-          const cv::Mat segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, 0.5f));
+          const float cut = dasp::cutThreshold(ucg, grid[g]);
+          const cv::Mat segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, cut));
           t.labelling = threadCpuMilliseconds() - t0;
           (void)segments;
           t0 = threadCpuMilliseconds();
@@ -508,6 +575,24 @@ int main(int argc, char** argv) {
               dasp::boundaryCurve(ucm, truth, mask, thresholds);
           curves[g].thresholds = thresholds;
           curves[g].add(frame_curve);
+          std::vector<float> frame_cuts;
+          for (const AdaptiveSetting& a : adaptive) {
+            frame_cuts.push_back(dasp::adaptiveCutThreshold(ucg, a.scale, a.quantile, a.cap));
+          }
+          const std::vector<dasp::BoundaryCounts> cut_counts =
+              dasp::boundaryCurve(ucm, truth, mask, frame_cuts);
+          nlohmann::json frame_adaptive = nlohmann::json::array();
+          for (std::size_t a = 0; a < adaptive.size(); ++a) {
+            adaptive_total[g][a] += cut_counts[a];
+            frame_adaptive.push_back(countsJson(cut_counts[a]));
+          }
+          if (per_frame) {
+            nlohmann::json frame_points = nlohmann::json::array();
+            for (const dasp::BoundaryCounts& c : frame_curve) frame_points.push_back(countsJson(c));
+            curve_counts[g].push_back(frame_points);
+            adaptive_counts[g].push_back(frame_adaptive);
+            adaptive_thresholds[g].push_back(frame_cuts);
+          }
           double best = 0.0;
           for (const auto& c : frame_curve) best = std::max(best, c.f1());
           frame_f1[g].push_back(best);
@@ -526,14 +611,35 @@ int main(int argc, char** argv) {
         r["eigenvectors"] = grid[g].spectral.eigenvector_count;
         const nlohmann::ordered_json c = curveJson(curves[g], times[g], frame_f1[g]);
         for (const auto& [key, value] : c.items()) r[key] = value;
+        nlohmann::ordered_json cuts = nlohmann::ordered_json::array();
+        std::size_t best_adaptive = 0;
+        for (std::size_t a = 0; a < adaptive.size(); ++a) {
+          const dasp::BoundaryCounts& c = adaptive_total[g][a];
+          cuts.push_back({{"scale", adaptive[a].scale},
+                          {"quantile", adaptive[a].quantile},
+                          {"max_threshold", adaptive[a].cap},
+                          {"precision", c.precision()},
+                          {"recall", c.recall()},
+                          {"f1", c.f1()}});
+          if (c.f1() > adaptive_total[g][best_adaptive].f1()) best_adaptive = a;
+        }
+        r["adaptive"] = cuts;
+        if (per_frame) {
+          r["frame_counts"] = curve_counts[g];
+          r["adaptive_frame_counts"] = adaptive_counts[g];
+          r["adaptive_frame_thresholds"] = adaptive_thresholds[g];
+        }
         std::cout << std::defaultfloat << std::setprecision(4) << method << " c "
                   << grid[g].graph.weight_color << " v " << grid[g].graph.weight_position << " n "
                   << grid[g].graph.weight_normal << " k " << grid[g].spectral.eigenvector_count
                   << " theta " << grid[g].graph.min_border_pairs << ": ODS F1 "
                   << std::setprecision(4) << r["ods"]["f1"].get<double>()
                   << " at t = " << r["ods"]["threshold"].get<double>() << ", OIS F1 "
-                  << r["ois"]["f1"].get<double>() << ", " << std::setprecision(1) << std::fixed
-                  << r["time_ms"]["segmentation_total"].get<double>() << " ms/frame"
+                  << r["ois"]["f1"].get<double>() << ", adaptive cut F1 "
+                  << adaptive_total[g][best_adaptive].f1() << " (scale "
+                  << adaptive[best_adaptive].scale << ", q " << adaptive[best_adaptive].quantile
+                  << ", max " << adaptive[best_adaptive].cap << "), " << std::setprecision(1)
+                  << std::fixed << r["time_ms"]["segmentation_total"].get<double>() << " ms/frame"
                   << std::defaultfloat << "\n";
         out["results"].push_back(r);
       }
