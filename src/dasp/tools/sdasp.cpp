@@ -249,45 +249,56 @@ int runSegment(const dasp::RgbdFramePaths& paths, const dasp::Intrinsics& intrin
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{
-      "s-DASP image segmentation (thesis ch. 4): segment one frame, or evaluate boundary "
-      "precision/recall, ODS/OIS F1 and time on a folder against s-SLIC and PCL LCCP."};
-  app.require_subcommand(1);
-  dasp::SdaspConfig config;
-  int count = 1000;
-  std::uint64_t seed = 0;
-  std::string normalization = "max";
-
-  auto add_common = [&](CLI::App* sub) {
-    sub->add_option("-k,--count", count, "number of superpixels K")->capture_default_str();
-    sub->add_option("--seed", seed, "random seed of the superpixels")->capture_default_str();
-  };
-
-  // segment
-  CLI::App* segment = app.add_subcommand("segment", "s-DASP segmentation of one frame");
+// `segment` and `lccp`: one frame, its pictures and labels.
+struct SegmentOptions {
   dasp::RgbdFramePaths paths;
   dasp::Intrinsics intrinsics;
   std::string superpixels_kind = "DASP";
   std::string cut_rule = "adaptive";
   std::string segments_path, ucm_path, labels_path, superpixels_path, overlay_path;
-  segment->add_option("--color", paths.color, "8-bit colour PNG")
+  double picture_scale = 1.0;
+  dasp::peers::LccpConfig lccp;
+};
+
+// `evaluate`: the folder, the methods and the parameter grids (comma lists).
+struct EvaluateOptions {
+  std::string folder, json_path, methods_text = "sDASP,sSLIC,LCCP";
+  int threshold_count = 201;
+  int max_frames = 0;
+  std::string color_weights, position_weights, normal_weights, eigen_counts, thetas;
+  std::string lccp_seeds = "0.015,0.02,0.03";
+  std::string adaptive_scales, adaptive_quantiles, adaptive_caps;
+  bool per_frame = false;
+  bool lccp_single_camera = false;
+
+  explicit EvaluateOptions(const dasp::SdaspConfig& config)
+      : color_weights(std::to_string(config.graph.weight_color)),
+        position_weights(std::to_string(config.graph.weight_position)),
+        normal_weights(std::to_string(config.graph.weight_normal)),
+        eigen_counts(std::to_string(config.spectral.eigenvector_count)),
+        thetas(std::to_string(config.graph.min_border_pairs)),
+        adaptive_scales(std::to_string(config.adaptive_scale)),
+        adaptive_quantiles(std::to_string(config.adaptive_quantile)),
+        adaptive_caps(std::to_string(config.adaptive_max_threshold)) {}
+};
+
+CLI::App* addSegmentCommand(CLI::App& app, SegmentOptions& o, dasp::SdaspConfig& config) {
+  CLI::App* segment = app.add_subcommand("segment", "s-DASP segmentation of one frame");
+  segment->add_option("--color", o.paths.color, "8-bit colour PNG")
       ->required()
       ->check(CLI::ExistingFile);
-  segment->add_option("--depth", paths.depth, "16-bit depth PNG in millimetres")
+  segment->add_option("--depth", o.paths.depth, "16-bit depth PNG in millimetres")
       ->required()
       ->check(CLI::ExistingFile);
   segment
-      ->add_option("--superpixels", superpixels_kind,
+      ->add_option("--superpixels", o.superpixels_kind,
                    "DASP (s-DASP), ASP_RGB (s-SLIC) or ASP_RGB_VALID")
       ->capture_default_str();
   segment
       ->add_option("-t,--threshold", config.threshold,
                    "global cut threshold on the normalised UCG weights (edges below it merge)")
       ->capture_default_str();
-  segment->add_option("--cut", cut_rule, "cut rule: adaptive (per frame) or global (--threshold)")
+  segment->add_option("--cut", o.cut_rule, "cut rule: adaptive (per frame) or global (--threshold)")
       ->check(CLI::IsMember({"adaptive", "global"}))
       ->capture_default_str();
   segment->add_option("--adaptive-scale", config.adaptive_scale, "adaptive cut: scale")
@@ -298,15 +309,14 @@ int main(int argc, char** argv) {
       ->add_option("--adaptive-max-threshold", config.adaptive_max_threshold,
                    "adaptive cut: largest threshold")
       ->capture_default_str();
-  segment->add_option("--segments", segments_path, "output PNG: segments in false colours");
-  segment->add_option("--ucm", ucm_path, "output PNG: ultrametric contour map (dark = strong)");
-  segment->add_option("--superpixel-overlay", superpixels_path,
+  segment->add_option("--segments", o.segments_path, "output PNG: segments in false colours");
+  segment->add_option("--ucm", o.ucm_path, "output PNG: ultrametric contour map (dark = strong)");
+  segment->add_option("--superpixel-overlay", o.superpixels_path,
                       "output PNG: superpixel boundaries over the colour image");
-  segment->add_option("--segment-overlay", overlay_path,
+  segment->add_option("--segment-overlay", o.overlay_path,
                       "output PNG: segment boundaries (red) over the colour image");
-  segment->add_option("--labels", labels_path, "output 16-bit PNG: segment + 1, 0 = unlabelled");
-  double picture_scale = 1.0;
-  segment->add_option("--picture-scale", picture_scale, "size of the pictures (1 = frame size)")
+  segment->add_option("--labels", o.labels_path, "output 16-bit PNG: segment + 1, 0 = unlabelled");
+  segment->add_option("--picture-scale", o.picture_scale, "size of the pictures (1 = frame size)")
       ->capture_default_str();
   segment->add_option("--color-weight", config.graph.weight_color, "lambda_c")
       ->capture_default_str();
@@ -318,338 +328,427 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   segment->add_option("--theta", config.graph.min_border_pairs, "Theta (min border pairs)")
       ->capture_default_str();
-  add_common(segment);
+  return segment;
+}
 
-  // lccp
+CLI::App* addLccpCommand(CLI::App& app, SegmentOptions& o) {
   CLI::App* lccp_cmd = app.add_subcommand("lccp", "PCL LCCP segmentation of one frame (peer)");
-  dasp::peers::LccpConfig lccp_config;
-  lccp_cmd->add_option("--color", paths.color, "8-bit colour PNG")
+  lccp_cmd->add_option("--color", o.paths.color, "8-bit colour PNG")
       ->required()
       ->check(CLI::ExistingFile);
-  lccp_cmd->add_option("--depth", paths.depth, "16-bit depth PNG in millimetres")
+  lccp_cmd->add_option("--depth", o.paths.depth, "16-bit depth PNG in millimetres")
       ->required()
       ->check(CLI::ExistingFile);
   lccp_cmd
-      ->add_option("--lccp-seed-resolution", lccp_config.seed_resolution_m,
+      ->add_option("--lccp-seed-resolution", o.lccp.seed_resolution_m,
                    "supervoxel seed resolution in metres")
       ->capture_default_str();
-  lccp_cmd->add_flag("--lccp-single-camera-transform", lccp_config.single_camera_transform,
+  lccp_cmd->add_flag("--lccp-single-camera-transform", o.lccp.single_camera_transform,
                      "depth-dependent voxel grid (PCL example switch -tvoxel)");
-  lccp_cmd->add_option("--segments", segments_path, "output PNG: segments in false colours");
-  lccp_cmd->add_option("--picture-scale", picture_scale, "size of the pictures")
+  lccp_cmd->add_option("--segments", o.segments_path, "output PNG: segments in false colours");
+  lccp_cmd->add_option("--picture-scale", o.picture_scale, "size of the pictures")
       ->capture_default_str();
+  return lccp_cmd;
+}
 
-  // evaluate
+CLI::App* addEvaluateCommand(CLI::App& app, EvaluateOptions& o) {
   CLI::App* evaluate = app.add_subcommand("evaluate", "PR curves, ODS/OIS F1 and times");
-  std::string folder, json_path, methods_text = "sDASP,sSLIC,LCCP";
-  int threshold_count = 201;
-  int max_frames = 0;
-  std::string color_weights = std::to_string(config.graph.weight_color);
-  std::string position_weights = std::to_string(config.graph.weight_position);
-  std::string normal_weights = std::to_string(config.graph.weight_normal);
-  std::string eigen_counts = std::to_string(config.spectral.eigenvector_count);
-  std::string thetas = std::to_string(config.graph.min_border_pairs);
-  std::string lccp_seeds = "0.015,0.02,0.03";
-  std::string adaptive_scales = std::to_string(config.adaptive_scale);
-  std::string adaptive_quantiles = std::to_string(config.adaptive_quantile);
-  std::string adaptive_caps = std::to_string(config.adaptive_max_threshold);
-  bool per_frame = false;
-  evaluate->add_option("--folder", folder, "folder of <name>_rgb/_depth_mm/_label_object.png")
+  evaluate->add_option("--folder", o.folder, "folder of <name>_rgb/_depth_mm/_label_object.png")
       ->required()
       ->check(CLI::ExistingDirectory);
-  evaluate->add_option("--json", json_path, "output JSON with curves, ODS, OIS, times")->required();
+  evaluate->add_option("--json", o.json_path, "output JSON with curves, ODS, OIS, times")
+      ->required();
   evaluate
-      ->add_option("--methods", methods_text,
+      ->add_option("--methods", o.methods_text,
                    "comma list of sDASP, sSLIC, sSLICvalid (ASP_RGB on depth-valid pixels), LCCP")
       ->capture_default_str();
   evaluate
-      ->add_option("--thresholds", threshold_count,
+      ->add_option("--thresholds", o.threshold_count,
                    "number of thresholds evenly spaced in [0, 1] (curve points)")
       ->capture_default_str();
-  evaluate->add_option("--frames", max_frames, "use only the first N frames (0 = all)");
-  evaluate->add_option("--color-weight", color_weights, "lambda_c, comma list = grid")
+  evaluate->add_option("--frames", o.max_frames, "use only the first N frames (0 = all)");
+  evaluate->add_option("--color-weight", o.color_weights, "lambda_c, comma list = grid")
       ->capture_default_str();
-  evaluate->add_option("--position-weight", position_weights, "lambda_v, comma list = grid")
+  evaluate->add_option("--position-weight", o.position_weights, "lambda_v, comma list = grid")
       ->capture_default_str();
-  evaluate->add_option("--normal-weight", normal_weights, "lambda_n, comma list = grid")
+  evaluate->add_option("--normal-weight", o.normal_weights, "lambda_n, comma list = grid")
       ->capture_default_str();
-  evaluate->add_option("--eigenvectors", eigen_counts, "k, comma list = grid")
+  evaluate->add_option("--eigenvectors", o.eigen_counts, "k, comma list = grid")
       ->capture_default_str();
-  evaluate->add_option("--theta", thetas, "Theta (min border pairs), comma list = grid")
+  evaluate->add_option("--theta", o.thetas, "Theta (min border pairs), comma list = grid")
       ->capture_default_str();
   evaluate
-      ->add_option("--lccp-seed-resolutions", lccp_seeds,
+      ->add_option("--lccp-seed-resolutions", o.lccp_seeds,
                    "LCCP supervoxel seed resolutions in metres (one run each)")
       ->capture_default_str();
-  evaluate->add_option("--adaptive-scale", adaptive_scales, "adaptive cut scale, comma list")
+  evaluate->add_option("--adaptive-scale", o.adaptive_scales, "adaptive cut scale, comma list")
       ->capture_default_str();
-  evaluate->add_option("--adaptive-quantile", adaptive_quantiles, "adaptive cut quantile, list")
+  evaluate->add_option("--adaptive-quantile", o.adaptive_quantiles, "adaptive cut quantile, list")
       ->capture_default_str();
-  evaluate->add_option("--adaptive-max-threshold", adaptive_caps, "adaptive cut upper bound, list")
+  evaluate
+      ->add_option("--adaptive-max-threshold", o.adaptive_caps, "adaptive cut upper bound, list")
       ->capture_default_str();
-  evaluate->add_flag("--per-frame", per_frame,
+  evaluate->add_flag("--per-frame", o.per_frame,
                      "write every frame's boundary counts (curve and adaptive cuts)");
-  bool lccp_single_camera = false;
-  evaluate->add_flag("--lccp-single-camera-transform", lccp_single_camera,
+  evaluate->add_flag("--lccp-single-camera-transform", o.lccp_single_camera,
                      "LCCP: depth-dependent voxel grid (PCL example switch -tvoxel)");
+  return evaluate;
+}
+
+int runLccp(const SegmentOptions& o) {
+  const dasp::RgbdFrame frame = dasp::loadRgbdFrame(o.paths, o.intrinsics);
+  int supervoxels = 0;
+  const double t0 = threadCpuMilliseconds();
+  const cv::Mat labels = dasp::peers::computeLccp(frame, o.lccp, &supervoxels);
+  std::cout << "LCCP: " << supervoxels << " supervoxels, "
+            << dasp::metrics::countSegments(labels, cv::Mat()) << " segments, " << std::fixed
+            << std::setprecision(1) << threadCpuMilliseconds() - t0 << " ms (thread CPU)\n";
+  if (!o.segments_path.empty()) {
+    writePicture(o.segments_path, segmentsPicture(labels), o.picture_scale);
+  }
+  return 0;
+}
+
+// Labelled frames of the folder (the first max_frames if > 0).
+std::vector<dasp::RgbdFramePaths> labelledFrames(const std::string& folder, int max_frames) {
+  std::vector<dasp::RgbdFramePaths> frames = dasp::listRgbdFolder(folder);
+  frames.erase(std::remove_if(frames.begin(), frames.end(),
+                              [](const dasp::RgbdFramePaths& f) { return f.label.empty(); }),
+               frames.end());
+  if (max_frames > 0 && static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
+  if (frames.empty()) throw std::invalid_argument("no frames with labels in " + folder);
+  return frames;
+}
+
+// threshold_count thresholds evenly spaced in [0, 1], and one just above 1 that merges
+// everything but the never-joined boundaries.
+std::vector<float> curveThresholds(int threshold_count) {
+  if (threshold_count < 2) throw std::invalid_argument("--thresholds must be >= 2");
+  std::vector<float> thresholds(static_cast<std::size_t>(threshold_count));
+  for (int i = 0; i < threshold_count; ++i) {
+    thresholds[i] = static_cast<float>(i) / static_cast<float>(threshold_count - 1);
+  }
+  thresholds.push_back(std::nextafter(1.0f, 2.0f));
+  return thresholds;
+}
+
+// The graph and spectral settings of the grid, each a copy of `config`.
+std::vector<dasp::SdaspConfig> settingsGrid(const dasp::SdaspConfig& config,
+                                            const EvaluateOptions& o) {
+  std::vector<dasp::SdaspConfig> grid;
+  for (float c : parseList<float>(o.color_weights)) {
+    for (float v : parseList<float>(o.position_weights)) {
+      for (float n : parseList<float>(o.normal_weights)) {
+        for (int k : parseList<int>(o.eigen_counts)) {
+          for (int theta : parseList<int>(o.thetas)) {
+            dasp::SdaspConfig g = config;
+            g.graph.weight_color = c;
+            g.graph.weight_position = v;
+            g.graph.weight_normal = n;
+            g.graph.min_border_pairs = theta;
+            g.spectral.eigenvector_count = k;
+            grid.push_back(g);
+          }
+        }
+      }
+    }
+  }
+  return grid;
+}
+
+struct AdaptiveSetting {
+  float scale, quantile, cap;
+};
+
+std::vector<AdaptiveSetting> adaptiveGrid(const EvaluateOptions& o) {
+  std::vector<AdaptiveSetting> adaptive;
+  for (float sc : parseList<float>(o.adaptive_scales)) {
+    for (float q : parseList<float>(o.adaptive_quantiles)) {
+      for (float cap : parseList<float>(o.adaptive_caps)) adaptive.push_back({sc, q, cap});
+    }
+  }
+  return adaptive;
+}
+
+// LCCP at one seed resolution over the frames: a single segmentation per frame, scored as every
+// pixel boundary at level 0.
+nlohmann::ordered_json evaluateLccp(const std::vector<dasp::RgbdFramePaths>& frames,
+                                    float seed_resolution, const EvaluateOptions& o) {
+  dasp::peers::LccpConfig lccp;
+  lccp.seed_resolution_m = seed_resolution;
+  lccp.single_camera_transform = o.lccp_single_camera;
+  dasp::BoundaryCounts total;
+  std::vector<Times> times;
+  std::vector<double> frame_f1;
+  nlohmann::json lccp_counts = nlohmann::json::array();
+  double supervoxels = 0.0, segment_count = 0.0;
+  for (const dasp::RgbdFramePaths& f : frames) {
+    const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
+    const cv::Mat truth = *dasp::loadLabelImage(f);
+    const cv::Mat mask = evaluationMask(frame, truth);
+    int supervoxel_count = 0;
+    const double t0 = threadCpuMilliseconds();
+    const cv::Mat labels = dasp::peers::computeLccp(frame, lccp, &supervoxel_count);
+    Times t;
+    t.superpixels = threadCpuMilliseconds() - t0;
+    times.push_back(t);
+    supervoxels += supervoxel_count;
+    segment_count += static_cast<double>(dasp::metrics::countSegments(labels, mask));
+    dasp::WeightedGraph none;  // labels are compact: 0..n-1
+    none.node_count = static_cast<int>(dasp::metrics::countSegments(labels, cv::Mat()));
+    const cv::Mat ucm = dasp::ultrametricContourMap(labels, none, mask);
+    const dasp::BoundaryCounts c = dasp::boundaryCurve(ucm, truth, mask, {0.0f}).front();
+    total += c;
+    frame_f1.push_back(c.f1());
+    lccp_counts.push_back(countsJson(c));
+  }
+  nlohmann::ordered_json r;
+  r["method"] = "LCCP";
+  r["lccp_seed_resolution_m"] = seed_resolution;
+  r["lccp_single_camera_transform"] = o.lccp_single_camera;
+  r["mean_supervoxels"] = supervoxels / frames.size();
+  r["mean_segments_in_mask"] = segment_count / frames.size();
+  r["ods"] = {{"precision", total.precision()}, {"recall", total.recall()}, {"f1", total.f1()}};
+  double mean_f1 = 0.0, mean_ms = 0.0;
+  for (double v : frame_f1) mean_f1 += v / frame_f1.size();
+  for (const Times& t : times) mean_ms += t.superpixels / times.size();
+  r["mean_frame_f1"] = mean_f1;
+  r["time_ms"] = {{"segmentation_total", mean_ms}};
+  r["frame_best_f1"] = frame_f1;
+  if (o.per_frame) r["frame_counts"] = lccp_counts;
+  std::cout << "LCCP seed " << seed_resolution << " m: F1 " << std::setprecision(4) << total.f1()
+            << " (P " << total.precision() << ", R " << total.recall() << "), "
+            << std::setprecision(1) << std::fixed << mean_ms << " ms/frame, "
+            << supervoxels / frames.size() << " supervoxels" << std::defaultfloat << "\n";
+  return r;
+}
+
+// The spectral segmentation of one grid setting, accumulated over the frames.
+struct SettingScores {
+  Curve curve;
+  std::vector<Times> times;
+  std::vector<double> frame_f1;
+  nlohmann::json curve_counts = nlohmann::json::array();
+  nlohmann::json adaptive_counts = nlohmann::json::array();
+  nlohmann::json adaptive_thresholds = nlohmann::json::array();
+  std::vector<dasp::BoundaryCounts> adaptive_total;
+};
+
+// One frame's superpixels under one setting: graph, eigenvectors, cut and UCM (timed), its
+// boundary curve and the adaptive cuts' counts.
+void scoreFrame(const dasp::Superpixels& sp, double t_superpixels, const cv::Mat& truth,
+                const cv::Mat& mask, const dasp::SdaspConfig& setting,
+                const std::vector<float>& thresholds, const std::vector<AdaptiveSetting>& adaptive,
+                bool per_frame, SettingScores& scores) {
+  Times t;
+  t.superpixels = t_superpixels;
+  double t0 = threadCpuMilliseconds();
+  dasp::WeightedGraph ucg = dasp::buildSuperpixelGraph(sp, setting.graph);
+  t.graph = threadCpuMilliseconds() - t0;
+  t0 = threadCpuMilliseconds();
+  const std::vector<float> global = dasp::globalizeEdgeWeights(ucg, setting.spectral);
+  for (std::size_t e = 0; e < global.size(); ++e) ucg.edges[e].weight = global[e];
+  t.eigen = threadCpuMilliseconds() - t0;
+  t0 = threadCpuMilliseconds();
+  const float cut = dasp::cutThreshold(ucg, setting);
+  const cv::Mat segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, cut));
+  t.labelling = threadCpuMilliseconds() - t0;
+  (void)segments;
+  t0 = threadCpuMilliseconds();
+  const cv::Mat ucm = dasp::ultrametricContourMap(sp.labels, ucg, mask);
+  t.ucm = threadCpuMilliseconds() - t0;
+  const std::vector<dasp::BoundaryCounts> frame_curve =
+      dasp::boundaryCurve(ucm, truth, mask, thresholds);
+  scores.curve.thresholds = thresholds;
+  scores.curve.add(frame_curve);
+  std::vector<float> frame_cuts;
+  for (const AdaptiveSetting& a : adaptive) {
+    frame_cuts.push_back(dasp::adaptiveCutThreshold(ucg, a.scale, a.quantile, a.cap));
+  }
+  const std::vector<dasp::BoundaryCounts> cut_counts =
+      dasp::boundaryCurve(ucm, truth, mask, frame_cuts);
+  nlohmann::json frame_adaptive = nlohmann::json::array();
+  scores.adaptive_total.resize(adaptive.size());
+  for (std::size_t a = 0; a < adaptive.size(); ++a) {
+    scores.adaptive_total[a] += cut_counts[a];
+    frame_adaptive.push_back(countsJson(cut_counts[a]));
+  }
+  if (per_frame) {
+    nlohmann::json frame_points = nlohmann::json::array();
+    for (const dasp::BoundaryCounts& c : frame_curve) frame_points.push_back(countsJson(c));
+    scores.curve_counts.push_back(frame_points);
+    scores.adaptive_counts.push_back(frame_adaptive);
+    scores.adaptive_thresholds.push_back(frame_cuts);
+  }
+  double best = 0.0;
+  for (const auto& c : frame_curve) best = std::max(best, c.f1());
+  scores.frame_f1.push_back(best);
+  scores.times.push_back(t);
+}
+
+// The JSON result of one setting (and its console line).
+nlohmann::ordered_json settingResult(const std::string& method, const std::string& kind,
+                                     double mean_superpixels, const dasp::SdaspConfig& setting,
+                                     const SettingScores& s,
+                                     const std::vector<AdaptiveSetting>& adaptive, bool per_frame) {
+  nlohmann::ordered_json r;
+  r["method"] = method;
+  r["superpixels"] = kind;
+  r["mean_superpixels"] = mean_superpixels;
+  r["weight_color"] = setting.graph.weight_color;
+  r["weight_position"] = setting.graph.weight_position;
+  r["weight_normal"] = setting.graph.weight_normal;
+  r["theta"] = setting.graph.min_border_pairs;
+  r["eigenvectors"] = setting.spectral.eigenvector_count;
+  const nlohmann::ordered_json c = curveJson(s.curve, s.times, s.frame_f1);
+  for (const auto& [key, value] : c.items()) r[key] = value;
+  nlohmann::ordered_json cuts = nlohmann::ordered_json::array();
+  std::size_t best_adaptive = 0;
+  for (std::size_t a = 0; a < adaptive.size(); ++a) {
+    const dasp::BoundaryCounts& counts = s.adaptive_total[a];
+    cuts.push_back({{"scale", adaptive[a].scale},
+                    {"quantile", adaptive[a].quantile},
+                    {"max_threshold", adaptive[a].cap},
+                    {"precision", counts.precision()},
+                    {"recall", counts.recall()},
+                    {"f1", counts.f1()}});
+    if (counts.f1() > s.adaptive_total[best_adaptive].f1()) best_adaptive = a;
+  }
+  r["adaptive"] = cuts;
+  if (per_frame) {
+    r["frame_counts"] = s.curve_counts;
+    r["adaptive_frame_counts"] = s.adaptive_counts;
+    r["adaptive_frame_thresholds"] = s.adaptive_thresholds;
+  }
+  std::cout << std::defaultfloat << std::setprecision(4) << method << " c "
+            << setting.graph.weight_color << " v " << setting.graph.weight_position << " n "
+            << setting.graph.weight_normal << " k " << setting.spectral.eigenvector_count
+            << " theta " << setting.graph.min_border_pairs << ": ODS F1 " << std::setprecision(4)
+            << r["ods"]["f1"].get<double>() << " at t = " << r["ods"]["threshold"].get<double>()
+            << ", OIS F1 " << r["ois"]["f1"].get<double>() << ", adaptive cut F1 "
+            << s.adaptive_total[best_adaptive].f1() << " (scale " << adaptive[best_adaptive].scale
+            << ", q " << adaptive[best_adaptive].quantile << ", max " << adaptive[best_adaptive].cap
+            << "), " << std::setprecision(1) << std::fixed
+            << r["time_ms"]["segmentation_total"].get<double>() << " ms/frame" << std::defaultfloat
+            << "\n";
+  return r;
+}
+
+// A spectral method (sDASP, sSLIC, sSLICvalid) over the frames, every grid setting on the same
+// superpixels of a frame: one result per setting.
+std::vector<nlohmann::ordered_json> evaluateSpectral(
+    const std::string& method, const std::vector<dasp::RgbdFramePaths>& frames,
+    const std::vector<dasp::SdaspConfig>& grid, const std::vector<AdaptiveSetting>& adaptive,
+    const std::vector<float>& thresholds, int count, std::uint64_t seed, bool per_frame) {
+  const std::string kind = method == "sDASP"   ? "DASP"
+                           : method == "sSLIC" ? "ASP_RGB"
+                           : method == "sSLICvalid"
+                               ? "ASP_RGB_VALID"
+                               : throw std::invalid_argument("unknown method " + method);
+  std::vector<SettingScores> scores(grid.size());
+  for (SettingScores& s : scores) s.adaptive_total.resize(adaptive.size());
+  double superpixel_total = 0.0;
+  for (const dasp::RgbdFramePaths& f : frames) {
+    const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
+    const cv::Mat truth = *dasp::loadLabelImage(f);
+    const cv::Mat mask = evaluationMask(frame, truth);
+    const double t0 = threadCpuMilliseconds();
+    const dasp::Superpixels sp = computeSuperpixels(kind, frame, count, seed);
+    const double t_superpixels = threadCpuMilliseconds() - t0;
+    superpixel_total += static_cast<double>(sp.superpixels.size());
+    for (std::size_t g = 0; g < grid.size(); ++g) {
+      scoreFrame(sp, t_superpixels, truth, mask, grid[g], thresholds, adaptive, per_frame,
+                 scores[g]);
+    }
+  }
+  std::vector<nlohmann::ordered_json> results;
+  for (std::size_t g = 0; g < grid.size(); ++g) {
+    results.push_back(settingResult(method, kind, superpixel_total / frames.size(), grid[g],
+                                    scores[g], adaptive, per_frame));
+  }
+  return results;
+}
+
+int runEvaluate(const EvaluateOptions& o, const dasp::SdaspConfig& config, int count,
+                std::uint64_t seed) {
+  const std::vector<dasp::RgbdFramePaths> frames = labelledFrames(o.folder, o.max_frames);
+  const std::vector<float> thresholds = curveThresholds(o.threshold_count);
+  const std::vector<dasp::SdaspConfig> grid = settingsGrid(config, o);
+  const std::vector<AdaptiveSetting> adaptive = adaptiveGrid(o);
+  std::vector<std::string> frame_names;
+  for (const dasp::RgbdFramePaths& f : frames) frame_names.push_back(f.name);
+  const std::vector<std::string> methods = parseList<std::string>(o.methods_text);
+  const std::vector<float> seeds = parseList<float>(o.lccp_seeds);
+
+  nlohmann::ordered_json out;
+  out["folder"] = o.folder;
+  out["frames"] = frames.size();
+  out["superpixel_count"] = count;
+  out["seed"] = seed;
+  out["mask"] = "object label > 0 and depth > 0";
+  out["boundary_tolerance_px"] = dasp::metrics::kDefaultBoundaryTolerancePx;
+  out["time"] = "thread CPU time per frame, single-threaded, milliseconds";
+  out["frame_files"] = frame_names;
+  out["thresholds"] = thresholds;
+  out["counts"] = "[partition, precise, reference, recalled] boundary pixels";
+  out["results"] = nlohmann::ordered_json::array();
+  for (const std::string& method : methods) {
+    if (method == "LCCP") {
+      for (float seed_resolution : seeds) {
+        out["results"].push_back(evaluateLccp(frames, seed_resolution, o));
+      }
+      continue;
+    }
+    for (nlohmann::ordered_json& r :
+         evaluateSpectral(method, frames, grid, adaptive, thresholds, count, seed, o.per_frame)) {
+      out["results"].push_back(std::move(r));
+    }
+  }
+  std::ofstream file(o.json_path);
+  if (!file) throw std::runtime_error("cannot write " + o.json_path);
+  file << out.dump(1) << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "s-DASP image segmentation (thesis ch. 4): segment one frame, or evaluate boundary "
+      "precision/recall, ODS/OIS F1 and time on a folder against s-SLIC and PCL LCCP."};
+  app.require_subcommand(1);
+  dasp::SdaspConfig config;
+  int count = 1000;
+  std::uint64_t seed = 0;
+  auto add_common = [&](CLI::App* sub) {
+    sub->add_option("-k,--count", count, "number of superpixels K")->capture_default_str();
+    sub->add_option("--seed", seed, "random seed of the superpixels")->capture_default_str();
+  };
+  SegmentOptions segment_options;
+  EvaluateOptions evaluate_options(config);
+  CLI::App* segment = addSegmentCommand(app, segment_options, config);
+  add_common(segment);
+  CLI::App* lccp_cmd = addLccpCommand(app, segment_options);
+  CLI::App* evaluate = addEvaluateCommand(app, evaluate_options);
   add_common(evaluate);
   CLI11_PARSE(app, argc, argv);
 
   try {
+    SegmentOptions& o = segment_options;
     if (segment->parsed()) {
-      paths.name = paths.color;
-      config.cut = cut_rule == "global" ? dasp::CutRule::kGlobal : dasp::CutRule::kAdaptive;
-      return runSegment(paths, intrinsics, superpixels_kind, count, seed, config, segments_path,
-                        ucm_path, labels_path, superpixels_path, overlay_path, picture_scale);
+      o.paths.name = o.paths.color;
+      config.cut = o.cut_rule == "global" ? dasp::CutRule::kGlobal : dasp::CutRule::kAdaptive;
+      return runSegment(o.paths, o.intrinsics, o.superpixels_kind, count, seed, config,
+                        o.segments_path, o.ucm_path, o.labels_path, o.superpixels_path,
+                        o.overlay_path, o.picture_scale);
     }
     if (lccp_cmd->parsed()) {
-      paths.name = paths.color;
-      const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths, intrinsics);
-      int supervoxels = 0;
-      const double t0 = threadCpuMilliseconds();
-      const cv::Mat labels = dasp::peers::computeLccp(frame, lccp_config, &supervoxels);
-      std::cout << "LCCP: " << supervoxels << " supervoxels, "
-                << dasp::metrics::countSegments(labels, cv::Mat()) << " segments, " << std::fixed
-                << std::setprecision(1) << threadCpuMilliseconds() - t0 << " ms (thread CPU)\n";
-      if (!segments_path.empty())
-        writePicture(segments_path, segmentsPicture(labels), picture_scale);
-      return 0;
+      o.paths.name = o.paths.color;
+      return runLccp(o);
     }
-    std::vector<dasp::RgbdFramePaths> frames = dasp::listRgbdFolder(folder);
-    frames.erase(std::remove_if(frames.begin(), frames.end(),
-                                [](const dasp::RgbdFramePaths& f) { return f.label.empty(); }),
-                 frames.end());
-    if (max_frames > 0 && static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
-    if (frames.empty()) throw std::invalid_argument("no frames with labels in " + folder);
-    if (threshold_count < 2) throw std::invalid_argument("--thresholds must be >= 2");
-    std::vector<float> thresholds(static_cast<std::size_t>(threshold_count));
-    for (int i = 0; i < threshold_count; ++i) {
-      thresholds[i] = static_cast<float>(i) / static_cast<float>(threshold_count - 1);
-    }
-    // A threshold just above 1 merges everything but the never-joined boundaries.
-    thresholds.push_back(std::nextafter(1.0f, 2.0f));
-
-    std::vector<dasp::SdaspConfig> grid;
-    for (float c : parseList<float>(color_weights)) {
-      for (float v : parseList<float>(position_weights)) {
-        for (float n : parseList<float>(normal_weights)) {
-          for (int k : parseList<int>(eigen_counts)) {
-            for (int theta : parseList<int>(thetas)) {
-              dasp::SdaspConfig g = config;
-              g.graph.weight_color = c;
-              g.graph.weight_position = v;
-              g.graph.weight_normal = n;
-              g.graph.min_border_pairs = theta;
-              g.spectral.eigenvector_count = k;
-              grid.push_back(g);
-            }
-          }
-        }
-      }
-    }
-    struct AdaptiveSetting {
-      float scale, quantile, cap;
-    };
-    std::vector<AdaptiveSetting> adaptive;
-    for (float sc : parseList<float>(adaptive_scales)) {
-      for (float q : parseList<float>(adaptive_quantiles)) {
-        for (float cap : parseList<float>(adaptive_caps)) adaptive.push_back({sc, q, cap});
-      }
-    }
-    std::vector<std::string> frame_names;
-    for (const dasp::RgbdFramePaths& f : frames) {
-      frame_names.push_back(f.name);
-    }
-    const std::vector<std::string> methods = parseList<std::string>(methods_text);
-    const std::vector<float> seeds = parseList<float>(lccp_seeds);
-
-    nlohmann::ordered_json out;
-    out["folder"] = folder;
-    out["frames"] = frames.size();
-    out["superpixel_count"] = count;
-    out["seed"] = seed;
-    out["mask"] = "object label > 0 and depth > 0";
-    out["boundary_tolerance_px"] = dasp::metrics::kDefaultBoundaryTolerancePx;
-    out["time"] = "thread CPU time per frame, single-threaded, milliseconds";
-    out["frame_files"] = frame_names;
-    out["thresholds"] = thresholds;
-    out["counts"] = "[partition, precise, reference, recalled] boundary pixels";
-    out["results"] = nlohmann::ordered_json::array();
-
-    for (const std::string& method : methods) {
-      if (method == "LCCP") {
-        for (float seed_resolution : seeds) {
-          dasp::peers::LccpConfig lccp;
-          lccp.seed_resolution_m = seed_resolution;
-          lccp.single_camera_transform = lccp_single_camera;
-          dasp::BoundaryCounts total;
-          std::vector<Times> times;
-          std::vector<double> frame_f1;
-          nlohmann::json lccp_counts = nlohmann::json::array();
-          double supervoxels = 0.0, segment_count = 0.0;
-          for (const dasp::RgbdFramePaths& f : frames) {
-            const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
-            const cv::Mat truth = *dasp::loadLabelImage(f);
-            const cv::Mat mask = evaluationMask(frame, truth);
-            int supervoxel_count = 0;
-            const double t0 = threadCpuMilliseconds();
-            const cv::Mat labels = dasp::peers::computeLccp(frame, lccp, &supervoxel_count);
-            Times t;
-            t.superpixels = threadCpuMilliseconds() - t0;
-            times.push_back(t);
-            supervoxels += supervoxel_count;
-            segment_count += static_cast<double>(dasp::metrics::countSegments(labels, mask));
-            // The curve of a single segmentation: every pixel boundary at level 0.
-            dasp::WeightedGraph none;  // labels are compact: 0..n-1
-            none.node_count = static_cast<int>(dasp::metrics::countSegments(labels, cv::Mat()));
-            const cv::Mat ucm = dasp::ultrametricContourMap(labels, none, mask);
-            const dasp::BoundaryCounts c = dasp::boundaryCurve(ucm, truth, mask, {0.0f}).front();
-            total += c;
-            frame_f1.push_back(c.f1());
-            lccp_counts.push_back(countsJson(c));
-          }
-          nlohmann::ordered_json r;
-          r["method"] = "LCCP";
-          r["lccp_seed_resolution_m"] = seed_resolution;
-          r["lccp_single_camera_transform"] = lccp_single_camera;
-          r["mean_supervoxels"] = supervoxels / frames.size();
-          r["mean_segments_in_mask"] = segment_count / frames.size();
-          r["ods"] = {
-              {"precision", total.precision()}, {"recall", total.recall()}, {"f1", total.f1()}};
-          double mean_f1 = 0.0, mean_ms = 0.0;
-          for (double v : frame_f1) mean_f1 += v / frame_f1.size();
-          for (const Times& t : times) mean_ms += t.superpixels / times.size();
-          r["mean_frame_f1"] = mean_f1;
-          r["time_ms"] = {{"segmentation_total", mean_ms}};
-          r["frame_best_f1"] = frame_f1;
-          if (per_frame) r["frame_counts"] = lccp_counts;
-          std::cout << "LCCP seed " << seed_resolution << " m: F1 " << std::setprecision(4)
-                    << total.f1() << " (P " << total.precision() << ", R " << total.recall()
-                    << "), " << std::setprecision(1) << std::fixed << mean_ms << " ms/frame, "
-                    << supervoxels / frames.size() << " supervoxels" << std::defaultfloat << "\n";
-          out["results"].push_back(r);
-        }
-        continue;
-      }
-      const std::string kind = method == "sDASP"   ? "DASP"
-                               : method == "sSLIC" ? "ASP_RGB"
-                               : method == "sSLICvalid"
-                                   ? "ASP_RGB_VALID"
-                                   : throw std::invalid_argument("unknown method " + method);
-      std::vector<Curve> curves(grid.size());
-      std::vector<std::vector<Times>> times(grid.size());
-      std::vector<std::vector<double>> frame_f1(grid.size());
-      std::vector<nlohmann::json> curve_counts(grid.size(), nlohmann::json::array());
-      std::vector<nlohmann::json> adaptive_counts(grid.size(), nlohmann::json::array());
-      std::vector<nlohmann::json> adaptive_thresholds(grid.size(), nlohmann::json::array());
-      std::vector<std::vector<dasp::BoundaryCounts>> adaptive_total(
-          grid.size(), std::vector<dasp::BoundaryCounts>(adaptive.size()));
-      double superpixel_total = 0.0;
-      for (const dasp::RgbdFramePaths& f : frames) {
-        const dasp::RgbdFrame frame = dasp::loadRgbdFrame(f);
-        const cv::Mat truth = *dasp::loadLabelImage(f);
-        const cv::Mat mask = evaluationMask(frame, truth);
-        double t0 = threadCpuMilliseconds();
-        const dasp::Superpixels sp = computeSuperpixels(kind, frame, count, seed);
-        const double t_superpixels = threadCpuMilliseconds() - t0;
-        superpixel_total += static_cast<double>(sp.superpixels.size());
-        for (std::size_t g = 0; g < grid.size(); ++g) {
-          Times t;
-          t.superpixels = t_superpixels;
-          t0 = threadCpuMilliseconds();
-          dasp::WeightedGraph ucg = dasp::buildSuperpixelGraph(sp, grid[g].graph);
-          t.graph = threadCpuMilliseconds() - t0;
-          t0 = threadCpuMilliseconds();
-          const std::vector<float> global = dasp::globalizeEdgeWeights(ucg, grid[g].spectral);
-          for (std::size_t e = 0; e < global.size(); ++e) ucg.edges[e].weight = global[e];
-          t.eigen = threadCpuMilliseconds() - t0;
-          t0 = threadCpuMilliseconds();
-          const float cut = dasp::cutThreshold(ucg, grid[g]);
-          const cv::Mat segments = dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, cut));
-          t.labelling = threadCpuMilliseconds() - t0;
-          (void)segments;
-          t0 = threadCpuMilliseconds();
-          const cv::Mat ucm = dasp::ultrametricContourMap(sp.labels, ucg, mask);
-          t.ucm = threadCpuMilliseconds() - t0;
-          const std::vector<dasp::BoundaryCounts> frame_curve =
-              dasp::boundaryCurve(ucm, truth, mask, thresholds);
-          curves[g].thresholds = thresholds;
-          curves[g].add(frame_curve);
-          std::vector<float> frame_cuts;
-          for (const AdaptiveSetting& a : adaptive) {
-            frame_cuts.push_back(dasp::adaptiveCutThreshold(ucg, a.scale, a.quantile, a.cap));
-          }
-          const std::vector<dasp::BoundaryCounts> cut_counts =
-              dasp::boundaryCurve(ucm, truth, mask, frame_cuts);
-          nlohmann::json frame_adaptive = nlohmann::json::array();
-          for (std::size_t a = 0; a < adaptive.size(); ++a) {
-            adaptive_total[g][a] += cut_counts[a];
-            frame_adaptive.push_back(countsJson(cut_counts[a]));
-          }
-          if (per_frame) {
-            nlohmann::json frame_points = nlohmann::json::array();
-            for (const dasp::BoundaryCounts& c : frame_curve) frame_points.push_back(countsJson(c));
-            curve_counts[g].push_back(frame_points);
-            adaptive_counts[g].push_back(frame_adaptive);
-            adaptive_thresholds[g].push_back(frame_cuts);
-          }
-          double best = 0.0;
-          for (const auto& c : frame_curve) best = std::max(best, c.f1());
-          frame_f1[g].push_back(best);
-          times[g].push_back(t);
-        }
-      }
-      for (std::size_t g = 0; g < grid.size(); ++g) {
-        nlohmann::ordered_json r;
-        r["method"] = method;
-        r["superpixels"] = kind;
-        r["mean_superpixels"] = superpixel_total / frames.size();
-        r["weight_color"] = grid[g].graph.weight_color;
-        r["weight_position"] = grid[g].graph.weight_position;
-        r["weight_normal"] = grid[g].graph.weight_normal;
-        r["theta"] = grid[g].graph.min_border_pairs;
-        r["eigenvectors"] = grid[g].spectral.eigenvector_count;
-        const nlohmann::ordered_json c = curveJson(curves[g], times[g], frame_f1[g]);
-        for (const auto& [key, value] : c.items()) r[key] = value;
-        nlohmann::ordered_json cuts = nlohmann::ordered_json::array();
-        std::size_t best_adaptive = 0;
-        for (std::size_t a = 0; a < adaptive.size(); ++a) {
-          const dasp::BoundaryCounts& c = adaptive_total[g][a];
-          cuts.push_back({{"scale", adaptive[a].scale},
-                          {"quantile", adaptive[a].quantile},
-                          {"max_threshold", adaptive[a].cap},
-                          {"precision", c.precision()},
-                          {"recall", c.recall()},
-                          {"f1", c.f1()}});
-          if (c.f1() > adaptive_total[g][best_adaptive].f1()) best_adaptive = a;
-        }
-        r["adaptive"] = cuts;
-        if (per_frame) {
-          r["frame_counts"] = curve_counts[g];
-          r["adaptive_frame_counts"] = adaptive_counts[g];
-          r["adaptive_frame_thresholds"] = adaptive_thresholds[g];
-        }
-        std::cout << std::defaultfloat << std::setprecision(4) << method << " c "
-                  << grid[g].graph.weight_color << " v " << grid[g].graph.weight_position << " n "
-                  << grid[g].graph.weight_normal << " k " << grid[g].spectral.eigenvector_count
-                  << " theta " << grid[g].graph.min_border_pairs << ": ODS F1 "
-                  << std::setprecision(4) << r["ods"]["f1"].get<double>()
-                  << " at t = " << r["ods"]["threshold"].get<double>() << ", OIS F1 "
-                  << r["ois"]["f1"].get<double>() << ", adaptive cut F1 "
-                  << adaptive_total[g][best_adaptive].f1() << " (scale "
-                  << adaptive[best_adaptive].scale << ", q " << adaptive[best_adaptive].quantile
-                  << ", max " << adaptive[best_adaptive].cap << "), " << std::setprecision(1)
-                  << std::fixed << r["time_ms"]["segmentation_total"].get<double>() << " ms/frame"
-                  << std::defaultfloat << "\n";
-        out["results"].push_back(r);
-      }
-    }
-    std::ofstream file(json_path);
-    if (!file) throw std::runtime_error("cannot write " + json_path);
-    file << out.dump(1) << "\n";
+    return runEvaluate(evaluate_options, config, count, seed);
   } catch (const std::exception& e) {
     std::cerr << "dasp_sdasp: " << e.what() << "\n";
     return 1;
   }
-  return 0;
 }
