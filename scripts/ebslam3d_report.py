@@ -43,8 +43,10 @@ def main():
     ap.add_argument("--sweep-duration", type=float, default=6.0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--command", default="scripts/ebslam3d_experiment.sh")
-    ap.add_argument("--from-log", help="write the page from the progress log of an interrupted run "
-                    "(its lines 'main|sweep PATH PRESET SEED SWEEP rmse R rtf F') and the runs' CSVs")
+    ap.add_argument("--source", default="dedvs", choices=["dedvs", "synthetic"])
+    ap.add_argument("--sweep-seeds", type=int, default=2, help="sweeps on seeds 1..this")
+    ap.add_argument("--from-results", action="store_true",
+                    help="only write the page, from RUNS/results.jsonl (e.g. of an interrupted run)")
     a = ap.parse_args()
     os.makedirs(a.runs, exist_ok=True)
     fig_dir = os.path.join(a.out, "ebslam3d")
@@ -54,8 +56,9 @@ def main():
     if not gt:
         sys.exit("no TUM ground truth found under " + a.data)
 
-    if a.from_log:
-        write_page(a, results_from_log(a), SWEEPS, "freiburg1_desk", partial=True)
+    if a.from_results:
+        results = [json.loads(l) for l in open(os.path.join(a.runs, "results.jsonl"))]
+        write_page(a, results, SWEEPS, "freiburg1_desk")
         return
     jobs = []
     for p in gt:
@@ -63,15 +66,15 @@ def main():
             for preset in ["default", "fast"]:
                 prefix = os.path.join(a.runs, f"{p}_{preset}_{seed}")
                 jobs.append(("main", p, preset, seed, None,
-                             ["--preset", preset, "--seed", seed, "--scene-seed", seed,
+                             ["--source", a.source, "--preset", preset, "--seed", seed, "--scene-seed", seed,
                               "--duration", a.duration], prefix))
     sweep_path = "freiburg1_desk" if "freiburg1_desk" in gt else next(iter(gt))
     sweeps = SWEEPS
     for name, values in sweeps.items():
         for flag, v in values:
-            for seed in (1,):
+            for seed in range(1, a.sweep_seeds + 1):
                 jobs.append(("sweep", sweep_path, "default", seed, (name, v),
-                             [flag, v, "--seed", seed, "--scene-seed", seed,
+                             ["--source", a.source, flag, v, "--seed", seed, "--scene-seed", seed,
                               "--duration", a.sweep_duration], None))
     results = []
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
