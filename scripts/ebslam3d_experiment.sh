@@ -1,8 +1,9 @@
 #!/bin/bash
 # Regenerates docs/results/ebslam3d.md: builds the ebslam core library (Release with debug info)
-# in BUILD_DIR, runs EB-SLAM-3D on synthetic depth events along every hand-held TUM path (default
-# and fast sets, three seeds), the parameter sweeps and the speed benchmark, and writes the page
-# and its plots. About 15-25 min on a loaded 2-core machine.
+# in BUILD_DIR, runs EB-SLAM-3D on D-eDVS depth events (simulator + depth fusion) along every
+# hand-held TUM path (default and fast sets, three seeds), the parameter sweeps (freiburg1_desk,
+# seeds 1-2) and the speed benchmark, and writes the page and its plots. About an hour on a
+# loaded 2-core machine.
 #   scripts/ebslam3d_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
