@@ -286,7 +286,7 @@ def write_page(a, results, sweeps, sweep_path):
         w("  along N, the event share and the voxel size (more particles or events: lower error, proportionally slower;")
         w("  the fast set's quarter of the events and 25 particles lose freiburg1_desk and _room); the diffusion has its")
         w("  optimum at the default; the K the sweep favours did not carry over to the held-out half (above). The")
-        w("  divergences are on freiburg1_room, the fastest path (its rotations outrun the per-event diffusion).")
+        w("  default-set divergences are all on freiburg1_room, the path with the fastest turns and the most events per second.")
         mem = [r["peak_memory_bytes"] for r in main_runs if "peak_memory_bytes" in r]
         rss = [r["peak_rss_bytes"] for r in main_runs if "peak_rss_bytes" in r]
         if mem:
