@@ -189,7 +189,9 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
         static_broadcaster_->sendTransform(
             toTransformMsg(*mount_, ros::Time(0), config_.base_frame, config_.sensor_frame));
       }
-      pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
+      // One pose per input message: a backlog drained at once sends a burst (kept for a slow
+      // subscriber).
+      pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 1000);
       path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
       particles_pub_ = nh.advertise<geometry_msgs::PoseArray>("particles", 1);
       map_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map", 1);

@@ -1,19 +1,34 @@
 // One EB-SLAM-3D run (thesis 8.3-8.4) on depth events along a ground-truth camera path, scored
 // like table 8.1: position RMSE after alignment with a time offset (eq. 8.16-8.19), rotation
 // error (eq. 8.20), real-time factor (event time span / CPU time of the filter) and peak memory.
-// The events come from the synthetic depth-event source (synthetic_depth_events.h: a textured
-// box room around the path), e.g.
-//   ebslam_experiment_ebslam3d --groundtruth rgbd_dataset_freiburg1_xyz-groundtruth.txt --seed 2
+// Event sources (--source):
+//  - dedvs (default): the D-eDVS simulator (dedvs_simulator.h) renders a furnished room
+//    (dedvs_scene.h) along the path, generates the eDVS events and the depth frames, and the
+//    D-eDVS depth fusion (dedvs_fusion.h) gives each event its 3D point, each event fused with
+//    the depth frame nearest in time; events without a depth are dropped. The path is the depth
+//    camera's (TUM convention); the filter tracks the eDVS, scored against the eDVS's truth.
+//  - synthetic: synthetic_depth_events.h (a textured box room, geometric event model).
+// e.g. ebslam_experiment_ebslam3d --groundtruth rgbd_dataset_freiburg1_xyz-groundtruth.txt --seed 2
 // Prints one JSON object (stdout). Exit status: 0 success, 1 usage / input error.
 
+#include <sys/resource.h>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <deque>
 #include <exception>
 #include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "ebslam/dedvs_fusion.h"
+#include "ebslam/dedvs_io.h"
+#include "ebslam/dedvs_scene.h"
+#include "ebslam/dedvs_simulator.h"
 #include "ebslam/ebslam3d.h"
 #include "ebslam/synthetic_depth_events.h"
 #include "ebslam/trajectory.h"
@@ -21,18 +36,70 @@
 
 namespace {
 
+std::size_t peakRssBytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<std::size_t>(usage.ru_maxrss) * 1024u;  // Linux: kilobytes
+}
+
 double threadCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+using PointSink = std::function<void(const ebslam::PointEvent&)>;
+
+// D-eDVS source: simulates the rig along `truth` (shifted to start at 0 s) over
+// [0, duration] and streams the fused events to `sink`. Returns the eDVS ground truth.
+ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_s,
+                               std::uint64_t seed, const PointSink& sink, std::size_t* simulated,
+                               std::size_t* without_depth) {
+  using namespace ebslam;
+  RoomSceneConfig room;
+  room.seed = seed;
+  const Scene scene = makeRoomScene(truth, room);
+  DedvsSimulatorConfig config;
+  config.seed = seed;
+  config.events.seed = seed;
+  DepthEventFusion fusion(sensorsOf(config));
+  // An event is fused once the frame after it has arrived (frames come after every event up to
+  // their exposure), so it takes the frame nearest in time.
+  std::deque<Event> pending;
+  auto fuseUpTo = [&](double t_end_s) {
+    while (!pending.empty() && 1e-6 * static_cast<double>(pending.front().t_us) <= t_end_s) {
+      const FusedEvent f = fusion.fuse(pending.front());
+      pending.pop_front();
+      if (!std::isfinite(f.depth_m)) {
+        ++*without_depth;
+        continue;
+      }
+      PointEvent p;
+      p.t_us = f.event.t_us;
+      p.point = f.point;
+      sink(p);
+    }
+  };
+  const DedvsRun run = DedvsSimulator(config).simulate(
+      scene, truth, 0.0, duration_s,
+      [&](const std::vector<TrueDepthEvent>& batch) {
+        *simulated += batch.size();
+        for (const TrueDepthEvent& e : batch) pending.push_back(e.event);
+      },
+      [&](const DepthFrame& frame) {
+        fusion.addDepthFrame(frame.depth_mm, frame.stamp_s);
+        fuseUpTo(frame.t_s);
+      });
+  fuseUpTo(std::numeric_limits<double>::infinity());
+  return run.edvs_ground_truth;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace ebslam;
-  CLI::App app{"EB-SLAM-3D on synthetic depth events along a ground-truth path"};
-  std::string groundtruth, preset = "default", trajectory_out, map_out, truth_out;
+  CLI::App app{"EB-SLAM-3D on simulated depth events along a ground-truth path"};
+  std::string groundtruth, source = "dedvs", preset = "default", trajectory_out, map_out, truth_out;
   double duration_s = 0.0, record_every_s = 0.01;
   std::uint64_t scene_seed = 1;
   SyntheticRoomConfig room;
@@ -42,12 +109,17 @@ int main(int argc, char** argv) {
   app.add_option("--groundtruth", groundtruth, "TUM ground-truth camera path")
       ->required()
       ->check(CLI::ExistingFile);
+  app.add_option("--source", source,
+                 "depth events: dedvs (D-eDVS simulator + depth fusion) or synthetic "
+                 "(synthetic_depth_events.h)")
+      ->check(CLI::IsMember({"dedvs", "synthetic"}))
+      ->capture_default_str();
   app.add_option("--preset", preset, "default or fast (thesis 8.4 parameter sets)")
       ->check(CLI::IsMember({"default", "fast"}))
       ->capture_default_str();
   app.add_option("--duration", duration_s, "use only the first this many seconds (0 = all)");
   app.add_option("--seed", config.seed, "filter seed (the scene and events use --scene-seed)");
-  app.add_option("--scene-seed", scene_seed, "seed of the synthetic room and its events");
+  app.add_option("--scene-seed", scene_seed, "seed of the room, its events and the depth noise");
   auto* n_opt = app.add_option("-N,--particles", config.num_particles, "N");
   auto* k_opt = app.add_option("-K,--resample-every", config.resample_every, "K");
   auto* b_opt = app.add_option("-B,--batch", config.batch_size, "B");
@@ -60,9 +132,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-map-mb", max_map_mb, "map memory bound [MiB] (0 = unbounded)");
   bool splat_all = false;
   app.add_flag("--splat-all-particles", splat_all, "eq. 8.9 with every particle");
-  app.add_option("--edges-per-m2", room.edges_per_square_m, "room texture density")
+  app.add_option("--edges-per-m2", room.edges_per_square_m, "synthetic room texture density")
       ->capture_default_str();
-  app.add_option("--noise-share", sim.noise_share, "noise events per edge event")
+  app.add_option("--noise-share", sim.noise_share, "synthetic noise events per edge event")
       ->capture_default_str();
   app.add_option("-o,--trajectory", trajectory_out, "estimated path (TUM)");
   app.add_option("--aligned-truth", truth_out, "CSV of per-pose errors and aligned positions");
@@ -85,73 +157,103 @@ int main(int argc, char** argv) {
     if (alpha_opt->count()) config.score_alpha = given.score_alpha;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
-    config.focal_px = sensor.focal_px;
-
-    const Trajectory truth = readTumTrajectory(groundtruth);
+    Trajectory truth = readTumTrajectory(groundtruth);
     if (truth.size() < 2) throw std::runtime_error("ground truth has fewer than two poses");
-    const double t0 = truth.front().t_s;
-    const double t1 =
-        duration_s > 0.0 ? std::min(truth.back().t_s, t0 + duration_s) : truth.back().t_s;
-    room.seed = scene_seed;
-    sim.seed = scene_seed;
-    const auto scene = makeSyntheticRoom(truth, room);
-    const PointEventVector events = simulateDepthEvents(scene, sensor, truth, t0, t1, sim);
 
-    EventSlam3d slam(config);
+    EventSlam3d* slam = nullptr;
     Trajectory estimate;
     const auto record_step = static_cast<std::int64_t>(record_every_s * 1e6);
     double cpu = 0.0;
-    std::size_t i = 0;
-    while (i < events.size()) {
-      const std::int64_t chunk_end = events[i].t_us + record_step;
-      std::size_t j = i;
-      while (j < events.size() && events[j].t_us < chunk_end) ++j;
+    std::size_t streamed = 0, simulated = 0, without_depth = 0;
+    std::int64_t first_us = 0, last_us = 0;
+    PointEventVector chunk;
+    auto flush = [&]() {
+      if (chunk.empty()) return;
       const double c0 = threadCpuSeconds();
-      slam.process(events.data() + i, j - i);
+      slam->process(chunk);
       cpu += threadCpuSeconds() - c0;
       StampedPose p;
-      p.t_s = 1e-6 * static_cast<double>(events[j - 1].t_us);
-      p.position = slam.estimate().position;
-      p.orientation = slam.estimate().orientation;
+      p.t_s = 1e-6 * static_cast<double>(chunk.back().t_us);
+      p.position = slam->estimate().position;
+      p.orientation = slam->estimate().orientation;
       if (estimate.empty() || p.t_s > estimate.back().t_s) estimate.push_back(p);
-      i = j;
+      chunk.clear();
+    };
+    // Events in chunks of record_every_s; one estimate per chunk.
+    const PointSink sink = [&](const PointEvent& e) {
+      if (streamed == 0) first_us = e.t_us;
+      if (!chunk.empty() && e.t_us >= chunk.front().t_us + record_step) flush();
+      chunk.push_back(e);
+      last_us = e.t_us;
+      ++streamed;
+    };
+    std::unique_ptr<EventSlam3d> slam_owner;
+    Trajectory sensor_truth;
+    if (source == "dedvs") {
+      const double t0 = truth.front().t_s;
+      for (StampedPose& pose : truth) pose.t_s -= t0;
+      const double t1 =
+          duration_s > 0.0 ? std::min(truth.back().t_s, duration_s) : truth.back().t_s;
+      config.focal_px = DedvsSimulatorConfig{}.edvs.focal_px;
+      slam_owner = std::make_unique<EventSlam3d>(config);
+      slam = slam_owner.get();
+      sensor_truth = dedvsEvents(truth, t1, scene_seed, sink, &simulated, &without_depth);
+    } else {
+      config.focal_px = sensor.focal_px;
+      const double t0 = truth.front().t_s;
+      const double t1 =
+          duration_s > 0.0 ? std::min(truth.back().t_s, t0 + duration_s) : truth.back().t_s;
+      room.seed = scene_seed;
+      sim.seed = scene_seed;
+      const auto scene = makeSyntheticRoom(truth, room);
+      const PointEventVector events = simulateDepthEvents(scene, sensor, truth, t0, t1, sim);
+      slam_owner = std::make_unique<EventSlam3d>(config);
+      slam = slam_owner.get();
+      simulated = events.size();
+      for (const PointEvent& e : events) sink(e);
+      sensor_truth = truth;
     }
+    flush();
+    if (streamed == 0) throw std::runtime_error("no events");
     if (estimate.size() < 3) throw std::runtime_error("too few events for an estimate");
     TrajectoryEvaluationConfig eval_config;
     eval_config.max_time_offset_s = 0.2;
     eval_config.estimate_body_rotation = false;
-    const TrajectoryEvaluation eval = evaluateTrajectory(estimate, truth, eval_config);
+    const TrajectoryEvaluation eval = evaluateTrajectory(estimate, sensor_truth, eval_config);
     if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, estimate);
     if (!truth_out.empty()) writeTrajectoryErrorsCsv(truth_out, eval);
     if (!map_out.empty()) {
       std::ofstream out(map_out);
-      slam.map().forEachVoxel(1.0f, [&](const VoxelIndex& v, float value) {
-        const Eigen::Vector3f c = slam.map().voxelCentre(v);
+      slam->map().forEachVoxel(1.0f, [&](const VoxelIndex& v, float value) {
+        const Eigen::Vector3f c = slam->map().voxelCentre(v);
         out << c.x() << ' ' << c.y() << ' ' << c.z() << ' ' << value << '\n';
       });
       if (!out) throw std::runtime_error("cannot write " + map_out);
     }
-    const double span = 1e-6 * static_cast<double>(events.back().t_us - events.front().t_us);
+    const double span = 1e-6 * static_cast<double>(last_us - first_us);
     std::printf(
-        "{\"groundtruth\": \"%s\", \"preset\": \"%s\", \"seed\": %llu, \"scene_seed\": %llu, "
+        "{\"groundtruth\": \"%s\", \"source\": \"%s\", \"preset\": \"%s\", \"seed\": %llu, "
+        "\"scene_seed\": %llu, "
         "\"N\": %d, \"K\": %d, \"B\": %d, \"event_share\": %g, \"voxel_m\": %g, "
         "\"sigma_position_m\": %g, \"sigma_rotation_rad\": %g, \"alpha\": %g, "
-        "\"duration_s\": %.3f, \"events\": %zu, \"events_per_s_stream\": %.0f, "
+        "\"duration_s\": %.3f, \"simulated_events\": %zu, \"events_without_depth\": %zu, "
+        "\"events\": %zu, \"events_per_s_stream\": %.0f, "
         "\"used_events\": %llu, \"cpu_s\": %.4f, \"events_per_s\": %.0f, \"realtime_factor\": "
         "%.2f, "
         "\"rmse_m\": %.5f, \"max_error_m\": %.5f, \"rotation_rmse_deg\": %.4f, "
-        "\"time_offset_s\": %.4f, \"peak_memory_bytes\": %zu, \"map_chunks\": %zu, "
+        "\"time_offset_s\": %.4f, \"peak_memory_bytes\": %zu, \"peak_rss_bytes\": %zu, "
+        "\"map_chunks\": %zu, "
         "\"evicted_chunks\": %llu}\n",
-        groundtruth.c_str(), preset.c_str(), static_cast<unsigned long long>(config.seed),
-        static_cast<unsigned long long>(scene_seed), config.num_particles, config.resample_every,
-        config.batch_size, config.event_share, config.voxel_size_m, config.sigma_position_m,
-        config.sigma_rotation_rad, config.score_alpha, span, events.size(),
-        static_cast<double>(events.size()) / span,
-        static_cast<unsigned long long>(slam.processedEvents()), cpu,
-        static_cast<double>(events.size()) / cpu, span / cpu, eval.position_rmse_m,
-        eval.position_max_m, eval.rotation_rmse_deg, eval.alignment.time_offset_s,
-        slam.peakMemoryBytes(), slam.map().chunkCount(),
-        static_cast<unsigned long long>(slam.map().evictedChunks()));
+        groundtruth.c_str(), source.c_str(), preset.c_str(),
+        static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(scene_seed),
+        config.num_particles, config.resample_every, config.batch_size, config.event_share,
+        config.voxel_size_m, config.sigma_position_m, config.sigma_rotation_rad, config.score_alpha,
+        span, simulated, without_depth, streamed, static_cast<double>(streamed) / span,
+        static_cast<unsigned long long>(slam->processedEvents()), cpu,
+        static_cast<double>(streamed) / cpu, span / cpu, eval.position_rmse_m, eval.position_max_m,
+        eval.rotation_rmse_deg, eval.alignment.time_offset_s, slam->peakMemoryBytes(),
+        peakRssBytes(), slam->map().chunkCount(),
+        static_cast<unsigned long long>(slam->map().evictedChunks()));
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
