@@ -94,6 +94,96 @@ ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_
   return run.edvs_ground_truth;
 }
 
+// Feeds the events to the filter in chunks of record_step_us of event time and records one
+// estimate per chunk; times the filter (thread CPU).
+class ChunkedRun {
+ public:
+  ChunkedRun(const ebslam::Ebslam3dConfig& config, std::int64_t record_step_us)
+      : slam_(config), record_step_us_(record_step_us) {}
+
+  void add(const ebslam::PointEvent& e) {
+    if (streamed_ == 0) first_us_ = e.t_us;
+    if (!chunk_.empty() && e.t_us >= chunk_.front().t_us + record_step_us_) flush();
+    chunk_.push_back(e);
+    last_us_ = e.t_us;
+    ++streamed_;
+  }
+
+  void flush() {
+    if (chunk_.empty()) return;
+    const double c0 = threadCpuSeconds();
+    slam_.process(chunk_);
+    cpu_s_ += threadCpuSeconds() - c0;
+    ebslam::StampedPose p;
+    p.t_s = 1e-6 * static_cast<double>(chunk_.back().t_us);
+    p.position = slam_.estimate().position;
+    p.orientation = slam_.estimate().orientation;
+    if (estimate_.empty() || p.t_s > estimate_.back().t_s) estimate_.push_back(p);
+    chunk_.clear();
+  }
+
+  const ebslam::EventSlam3d& slam() const { return slam_; }
+  const ebslam::Trajectory& estimate() const { return estimate_; }
+  std::size_t streamed() const { return streamed_; }
+  double cpuSeconds() const { return cpu_s_; }
+  double spanSeconds() const { return 1e-6 * static_cast<double>(last_us_ - first_us_); }
+
+ private:
+  ebslam::EventSlam3d slam_;
+  const std::int64_t record_step_us_;
+  ebslam::PointEventVector chunk_;
+  ebslam::Trajectory estimate_;
+  std::size_t streamed_ = 0;
+  std::int64_t first_us_ = 0, last_us_ = 0;
+  double cpu_s_ = 0.0;
+};
+
+// The final map's voxels above 1 as 'x y z value' lines.
+void writeMapXyz(const std::string& path, const ebslam::EventSlam3d& slam) {
+  std::ofstream out(path);
+  slam.map().forEachVoxel(1.0f, [&](const ebslam::VoxelIndex& v, float value) {
+    const Eigen::Vector3f c = slam.map().voxelCentre(v);
+    out << c.x() << ' ' << c.y() << ' ' << c.z() << ' ' << value << '\n';
+  });
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+// What a run used and measured, for the JSON line.
+struct RunSummary {
+  std::string groundtruth, source, preset;
+  std::uint64_t scene_seed = 0;
+  std::size_t simulated = 0, without_depth = 0;
+};
+
+void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const ChunkedRun& run,
+               const ebslam::TrajectoryEvaluation& eval) {
+  const ebslam::EventSlam3d& slam = run.slam();
+  const double span = run.spanSeconds(), cpu = run.cpuSeconds();
+  const std::size_t streamed = run.streamed();
+  std::printf(
+      "{\"groundtruth\": \"%s\", \"source\": \"%s\", \"preset\": \"%s\", \"seed\": %llu, "
+      "\"scene_seed\": %llu, "
+      "\"N\": %d, \"K\": %d, \"B\": %d, \"event_share\": %g, \"voxel_m\": %g, "
+      "\"sigma_position_m\": %g, \"sigma_rotation_rad\": %g, \"alpha\": %g, "
+      "\"duration_s\": %.3f, \"simulated_events\": %zu, \"events_without_depth\": %zu, "
+      "\"events\": %zu, \"events_per_s_stream\": %.0f, "
+      "\"used_events\": %llu, \"cpu_s\": %.4f, \"events_per_s\": %.0f, \"realtime_factor\": "
+      "%.2f, "
+      "\"rmse_m\": %.5f, \"max_error_m\": %.5f, \"rotation_rmse_deg\": %.4f, "
+      "\"time_offset_s\": %.4f, \"peak_memory_bytes\": %zu, \"peak_rss_bytes\": %zu, "
+      "\"map_chunks\": %zu, "
+      "\"evicted_chunks\": %llu}\n",
+      r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
+      static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
+      config.num_particles, config.resample_every, config.batch_size, config.event_share,
+      config.voxel_size_m, config.sigma_position_m, config.sigma_rotation_rad, config.score_alpha,
+      span, r.simulated, r.without_depth, streamed, static_cast<double>(streamed) / span,
+      static_cast<unsigned long long>(slam.processedEvents()), cpu,
+      static_cast<double>(streamed) / cpu, span / cpu, eval.position_rmse_m, eval.position_max_m,
+      eval.rotation_rmse_deg, eval.alignment.time_offset_s, slam.peakMemoryBytes(), peakRssBytes(),
+      slam.map().chunkCount(), static_cast<unsigned long long>(slam.map().evictedChunks()));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,34 +250,10 @@ int main(int argc, char** argv) {
     Trajectory truth = readTumTrajectory(groundtruth);
     if (truth.size() < 2) throw std::runtime_error("ground truth has fewer than two poses");
 
-    EventSlam3d* slam = nullptr;
-    Trajectory estimate;
-    const auto record_step = static_cast<std::int64_t>(record_every_s * 1e6);
-    double cpu = 0.0;
-    std::size_t streamed = 0, simulated = 0, without_depth = 0;
-    std::int64_t first_us = 0, last_us = 0;
-    PointEventVector chunk;
-    auto flush = [&]() {
-      if (chunk.empty()) return;
-      const double c0 = threadCpuSeconds();
-      slam->process(chunk);
-      cpu += threadCpuSeconds() - c0;
-      StampedPose p;
-      p.t_s = 1e-6 * static_cast<double>(chunk.back().t_us);
-      p.position = slam->estimate().position;
-      p.orientation = slam->estimate().orientation;
-      if (estimate.empty() || p.t_s > estimate.back().t_s) estimate.push_back(p);
-      chunk.clear();
-    };
-    // Events in chunks of record_every_s; one estimate per chunk.
-    const PointSink sink = [&](const PointEvent& e) {
-      if (streamed == 0) first_us = e.t_us;
-      if (!chunk.empty() && e.t_us >= chunk.front().t_us + record_step) flush();
-      chunk.push_back(e);
-      last_us = e.t_us;
-      ++streamed;
-    };
-    std::unique_ptr<EventSlam3d> slam_owner;
+    RunSummary summary{groundtruth, source, preset, scene_seed};
+    const auto record_step_us = static_cast<std::int64_t>(record_every_s * 1e6);
+    std::unique_ptr<ChunkedRun> run;
+    const PointSink sink = [&](const PointEvent& e) { run->add(e); };
     Trajectory sensor_truth;
     if (source == "dedvs") {
       const double t0 = truth.front().t_s;
@@ -195,9 +261,9 @@ int main(int argc, char** argv) {
       const double t1 =
           duration_s > 0.0 ? std::min(truth.back().t_s, duration_s) : truth.back().t_s;
       config.focal_px = DedvsSimulatorConfig{}.edvs.focal_px;
-      slam_owner = std::make_unique<EventSlam3d>(config);
-      slam = slam_owner.get();
-      sensor_truth = dedvsEvents(truth, t1, scene_seed, sink, &simulated, &without_depth);
+      run = std::make_unique<ChunkedRun>(config, record_step_us);
+      sensor_truth =
+          dedvsEvents(truth, t1, scene_seed, sink, &summary.simulated, &summary.without_depth);
     } else {
       config.focal_px = sensor.focal_px;
       const double t0 = truth.front().t_s;
@@ -207,53 +273,23 @@ int main(int argc, char** argv) {
       sim.seed = scene_seed;
       const auto scene = makeSyntheticRoom(truth, room);
       const PointEventVector events = simulateDepthEvents(scene, sensor, truth, t0, t1, sim);
-      slam_owner = std::make_unique<EventSlam3d>(config);
-      slam = slam_owner.get();
-      simulated = events.size();
+      run = std::make_unique<ChunkedRun>(config, record_step_us);
+      summary.simulated = events.size();
       for (const PointEvent& e : events) sink(e);
       sensor_truth = truth;
     }
-    flush();
-    if (streamed == 0) throw std::runtime_error("no events");
-    if (estimate.size() < 3) throw std::runtime_error("too few events for an estimate");
+    run->flush();
+    if (run->streamed() == 0) throw std::runtime_error("no events");
+    if (run->estimate().size() < 3) throw std::runtime_error("too few events for an estimate");
     TrajectoryEvaluationConfig eval_config;
     eval_config.max_time_offset_s = 0.2;
     eval_config.estimate_body_rotation = false;
-    const TrajectoryEvaluation eval = evaluateTrajectory(estimate, sensor_truth, eval_config);
-    if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, estimate);
+    const TrajectoryEvaluation eval =
+        evaluateTrajectory(run->estimate(), sensor_truth, eval_config);
+    if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, run->estimate());
     if (!truth_out.empty()) writeTrajectoryErrorsCsv(truth_out, eval);
-    if (!map_out.empty()) {
-      std::ofstream out(map_out);
-      slam->map().forEachVoxel(1.0f, [&](const VoxelIndex& v, float value) {
-        const Eigen::Vector3f c = slam->map().voxelCentre(v);
-        out << c.x() << ' ' << c.y() << ' ' << c.z() << ' ' << value << '\n';
-      });
-      if (!out) throw std::runtime_error("cannot write " + map_out);
-    }
-    const double span = 1e-6 * static_cast<double>(last_us - first_us);
-    std::printf(
-        "{\"groundtruth\": \"%s\", \"source\": \"%s\", \"preset\": \"%s\", \"seed\": %llu, "
-        "\"scene_seed\": %llu, "
-        "\"N\": %d, \"K\": %d, \"B\": %d, \"event_share\": %g, \"voxel_m\": %g, "
-        "\"sigma_position_m\": %g, \"sigma_rotation_rad\": %g, \"alpha\": %g, "
-        "\"duration_s\": %.3f, \"simulated_events\": %zu, \"events_without_depth\": %zu, "
-        "\"events\": %zu, \"events_per_s_stream\": %.0f, "
-        "\"used_events\": %llu, \"cpu_s\": %.4f, \"events_per_s\": %.0f, \"realtime_factor\": "
-        "%.2f, "
-        "\"rmse_m\": %.5f, \"max_error_m\": %.5f, \"rotation_rmse_deg\": %.4f, "
-        "\"time_offset_s\": %.4f, \"peak_memory_bytes\": %zu, \"peak_rss_bytes\": %zu, "
-        "\"map_chunks\": %zu, "
-        "\"evicted_chunks\": %llu}\n",
-        groundtruth.c_str(), source.c_str(), preset.c_str(),
-        static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(scene_seed),
-        config.num_particles, config.resample_every, config.batch_size, config.event_share,
-        config.voxel_size_m, config.sigma_position_m, config.sigma_rotation_rad, config.score_alpha,
-        span, simulated, without_depth, streamed, static_cast<double>(streamed) / span,
-        static_cast<unsigned long long>(slam->processedEvents()), cpu,
-        static_cast<double>(streamed) / cpu, span / cpu, eval.position_rmse_m, eval.position_max_m,
-        eval.rotation_rmse_deg, eval.alignment.time_offset_s, slam->peakMemoryBytes(),
-        peakRssBytes(), slam->map().chunkCount(),
-        static_cast<unsigned long long>(slam->map().evictedChunks()));
+    if (!map_out.empty()) writeMapXyz(map_out, run->slam());
+    printJson(summary, config, *run, eval);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
