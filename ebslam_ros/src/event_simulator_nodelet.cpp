@@ -62,15 +62,8 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
                           static_cast<std::size_t>(config_.path_length));
-    PacedEventOptions options;
-    options.speed = config_.speed;
-    options.publish_rate_hz = config_.publish_rate_hz;
-    options.publish_clock = config_.publish_clock;
-    options.clock_start_s = config_.clock_start_s;
-    options.wait_for_subscribers = config_.wait_for_subscribers;
-    options.frame_id = config_.frame_id;
-    options.sensor = {static_cast<std::uint32_t>(config_.simulator.camera.width),
-                      static_cast<std::uint32_t>(config_.simulator.camera.height)};
+    const PacedEventOptions options = pacedEventOptions(
+        config_, config_.frame_id, config_.simulator.camera.width, config_.simulator.camera.height);
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
       publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
     });

@@ -103,15 +103,8 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     colour_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("rgb/camera_info", 10);
     ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
                           static_cast<std::size_t>(config_.path_length));
-    PacedEventOptions options;
-    options.speed = config_.speed;
-    options.publish_rate_hz = config_.publish_rate_hz;
-    options.publish_clock = config_.publish_clock;
-    options.clock_start_s = config_.clock_start_s;
-    options.wait_for_subscribers = config_.wait_for_subscribers;
-    options.frame_id = config_.edvs_frame;
-    options.sensor = {static_cast<std::uint32_t>(config_.simulator.edvs.width),
-                      static_cast<std::uint32_t>(config_.simulator.edvs.height)};
+    const PacedEventOptions options = pacedEventOptions(
+        config_, config_.edvs_frame, config_.simulator.edvs.width, config_.simulator.edvs.height);
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
       publishGroundTruth(std::min(t_end_s, t_end_), stamp);
     });

@@ -7,17 +7,9 @@
 
 #include <vector>
 
-namespace {
+#include "rostest_util.h"
 
-template <typename Predicate>
-bool waitFor(Predicate done, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (!done() && ros::WallTime::now() < end) {
-    ros::spinOnce();
-    ros::WallDuration(0.005).sleep();
-  }
-  return done();
-}
+namespace {
 
 ebslam_msgs::Event event(const ros::Time& t, int x, int y, bool on) {
   ebslam_msgs::Event e;
@@ -39,8 +31,8 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
   std::vector<sensor_msgs::Image> images;
   ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>(
       "event_image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
-  ASSERT_TRUE(
-      waitFor([&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
   ros::WallDuration(0.3).sleep();
   ebslam_msgs::EventArray msg;
   msg.header.frame_id = "edvs_optical_frame";
@@ -51,7 +43,7 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
                 event(t0 + ros::Duration(0.12), 5, 6, false)};
   msg.header.stamp = msg.events.back().ts;
   events.publish(msg);
-  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !images.empty(); }, 5.0));
   const sensor_msgs::Image& image = images.back();
   EXPECT_EQ(image.encoding, "bgr8");
   EXPECT_EQ(image.width, 128u);
@@ -73,7 +65,7 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
   background.publish(grey);
   ros::WallDuration(0.3).sleep();
   images.clear();
-  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !images.empty(); }, 5.0));
   EXPECT_EQ(pixel(images.back(), 10, 10)[1], 77);
   EXPECT_EQ(pixel(images.back(), 3, 4)[0], 255);
   grey.width = 20;
@@ -82,7 +74,7 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
   background.publish(grey);
   ros::WallDuration(0.3).sleep();
   images.clear();
-  ASSERT_TRUE(waitFor([&] { return !images.empty(); }, 5.0));
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return !images.empty(); }, 5.0));
   EXPECT_EQ(pixel(images.back(), 10, 10)[1], 0);
 }
 

@@ -28,6 +28,22 @@ struct PacedEventOptions {
   ebslam::SensorSize sensor{};        ///< sensor size of the event messages
 };
 
+/// The pacing options of a simulator node config (EventSimulatorNodeConfig,
+/// RgbdEventSimulatorNodeConfig: the same field names) for an event sensor of width x height.
+template <typename SimulatorNodeConfig>
+PacedEventOptions pacedEventOptions(const SimulatorNodeConfig& config, const std::string& frame_id,
+                                    int width, int height) {
+  PacedEventOptions options;
+  options.speed = config.speed;
+  options.publish_rate_hz = config.publish_rate_hz;
+  options.publish_clock = config.publish_clock;
+  options.clock_start_s = config.clock_start_s;
+  options.wait_for_subscribers = config.wait_for_subscribers;
+  options.frame_id = frame_id;
+  options.sensor = {static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
+  return options;
+}
+
 class PacedEventPublisher {
  public:
   /// Thrown out of the simulation's callbacks once `stop` is set, to end it early.
