@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes docs/results/dedvs.md and its pictures from the outputs of scripts/dedvs_experiment.sh."""
+"""Writes docs/results/dedvs.md and its pictures from the outputs of scripts/results/dedvs_experiment.sh."""
 import argparse
 import os
 import re
@@ -87,7 +87,7 @@ def main():
 
     page = f"""# D-eDVS: simulator and depth fusion (issue 27, thesis 8.2)
 
-Regenerate with `scripts/dedvs_experiment.sh` (builds the core library, simulates, evaluates,
+Regenerate with `scripts/results/dedvs_experiment.sh` (builds the core library, simulates, evaluates,
 benchmarks, writes this page and its pictures). Everything is simulated: no public D-eDVS
 recording with ground truth exists. The rig follows the shared TUM freiburg1 hand-held
 motion-capture trajectories (desk, room, xyz) through a room built around each trajectory

@@ -8,10 +8,10 @@
 # about 25 min of CPU (runs that diverge are the slowest), several times that on a loaded machine.
 # The 3 Hz rows now on the page came from a shorter run merged into the page's section:
 #   ebslam_experiment_events2d --data <shared>/data --out <dir>/r3 --noise-only --noise-rates 3 --noise-seeds 5
-#   scripts/events2d_report.py <dir> --noise-section-only   (<dir>/*/noise_runs.csv, denoise.csv)
-#   scripts/events2d_experiment.sh [BUILD_DIR] [RUNS_DIR]
+#   scripts/results/events2d_report.py <dir> --noise-section-only   (<dir>/*/noise_runs.csv, denoise.csv)
+#   scripts/results/events2d_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
-repo="$(cd "$(dirname "$0")/.." && pwd)"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-/tmp/build_ebslam_events2d}"
 runs="${2:-/tmp/events2d_runs}"
 cmake -S "$repo/src/ebslam" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
@@ -23,5 +23,5 @@ cmake --build "$build" -j2 --target ebslam_experiment_events2d ebslam_ebpf_bench
   --benchmark_filter='BM_Ebpf/|BM_Ebslam2d/B:./N:(5|10|25|50|75|100|250)$|BM_BackgroundActivityFilter' \
   --benchmark_min_time=0.3 --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
   --benchmark_out="$runs/bench.json" --benchmark_out_format=json
-/usr/bin/python3 "$repo/scripts/events2d_report.py" "$runs" --bench "$runs/bench.json" \
-  --out "$repo/docs/results" --command "scripts/events2d_experiment.sh"
+/usr/bin/python3 "$repo/scripts/results/events2d_report.py" "$runs" --bench "$runs/bench.json" \
+  --out "$repo/docs/results" --command "scripts/results/events2d_experiment.sh"

@@ -98,7 +98,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--eval", required=True)
     ap.add_argument("--out", required=True)
-    ap.add_argument("--command", default="src/dasp/tools/make_sdasp_results.sh")
+    ap.add_argument("--command", default="scripts/results/make_sdasp_results.sh")
     args = ap.parse_args()
     ev = args.eval
     main_run = load(os.path.join(ev, "main.json"))
@@ -191,7 +191,7 @@ def main():
       "LCCP - is chosen on the training frames of a fold (best ODS F1 of the candidates, "
       "counts summed) and scored on its held-out frames; the held-out counts of all folds are "
       "summed (every frame is held out once). Folds by frame index: 5 folds (index mod 5), and "
-      "even/odd both ways. `src/dasp/tools/sdasp_crossval.py`. The figure of the same search "
+      "even/odd both ways. `scripts/results/sdasp_crossval.py`. The figure of the same search "
       "scored on the frames it was tuned on is given beside it, labelled, with the gap.")
     w("")
     w("| method | candidates | **CV ODS F1** (5 folds) | P / R | CV ODS F1 (even/odd) | "

@@ -5,9 +5,9 @@
 # 1-5; 10 simulated minutes each, about 80-100 CPU seconds per run) and the random bump-and-turn
 # baseline on the same rooms and seeds (40 simulated minutes each; it simulates no events), the
 # benchmark, and writes the page.
-#   [SEEDS="1 2 3 4 5"] scripts/exploration_experiment.sh [BUILD_DIR] [RUNS_DIR]
+#   [SEEDS="1 2 3 4 5"] scripts/results/exploration_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
-repo="$(cd "$(dirname "$0")/.." && pwd)"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-/tmp/build_ebslam_exploration}"
 runs="${2:-/tmp/exploration_runs}"
 read -r -a seeds <<< "${SEEDS:-1 2 3 4 5}"
@@ -39,5 +39,5 @@ wait
 mv "$runs/summary.csv.tmp" "$runs/summary.csv"
 "$build/ebslam_exploration_bench" --benchmark_min_time=0.5 \
   --benchmark_out="$runs/bench.json" --benchmark_out_format=json
-/usr/bin/python3 "$repo/scripts/exploration_report.py" "$runs" --plans "$repo/src/ebslam/floor_plans" \
-  --bench "$runs/bench.json" --out "$repo/docs/results" --command "scripts/exploration_experiment.sh"
+/usr/bin/python3 "$repo/scripts/results/exploration_report.py" "$runs" --plans "$repo/src/ebslam/floor_plans" \
+  --bench "$runs/bench.json" --out "$repo/docs/results" --command "scripts/results/exploration_experiment.sh"

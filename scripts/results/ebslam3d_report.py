@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Runs the EB-SLAM-3D evaluation (thesis 8.4, table 8.1, fig. 8.12, B.15/B.16) and writes
-docs/results/ebslam3d.md with its plots. Called by scripts/ebslam3d_experiment.sh.
+docs/results/ebslam3d.md with its plots. Called by scripts/results/ebslam3d_experiment.sh.
 
 Every hand-held TUM ground-truth path in shared/data/tum-groundtruth (freiburg1_xyz, _desk,
 _room, freiburg2_xyz) drives the D-eDVS simulator and depth fusion (ebslam_experiment_ebslam3d
@@ -43,7 +43,7 @@ def main():
     ap.add_argument("--duration", type=float, default=15.0)
     ap.add_argument("--sweep-duration", type=float, default=6.0)
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--command", default="scripts/ebslam3d_experiment.sh")
+    ap.add_argument("--command", default="scripts/results/ebslam3d_experiment.sh")
     ap.add_argument("--source", default="dedvs", choices=["dedvs", "synthetic"])
     ap.add_argument("--cut", default="", help="what was not run (printed on the page)")
     ap.add_argument("--check-k", type=int, help="only run the default set with this K on the held-out half "

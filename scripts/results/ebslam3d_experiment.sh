@@ -4,9 +4,9 @@
 # hand-held TUM path (default and fast sets, three seeds), the parameter sweeps (freiburg1_desk,
 # seeds 1-2) and the speed benchmark, and writes the page and its plots. About an hour on a
 # loaded 2-core machine.
-#   scripts/ebslam3d_experiment.sh [BUILD_DIR] [RUNS_DIR]
+#   scripts/results/ebslam3d_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
-repo="$(cd "$(dirname "$0")/.." && pwd)"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-/tmp/build_ebslam_ebslam3d}"
 runs="${2:-/tmp/ebslam3d_runs}"
 mkdir -p "$runs"
@@ -16,9 +16,9 @@ cmake --build "$build" -j2 --target ebslam_experiment_ebslam3d ebslam_ebslam3d_b
 "$build/ebslam_ebslam3d_bench" --benchmark_min_time=0.5 --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true --benchmark_out="$runs/bench.json" \
   --benchmark_out_format=json
-report=(/usr/bin/python3 "$repo/scripts/ebslam3d_report.py" --tool "$build/ebslam_experiment_ebslam3d"
+report=(/usr/bin/python3 "$repo/scripts/results/ebslam3d_report.py" --tool "$build/ebslam_experiment_ebslam3d"
   --data "$repo/../shared/data" --runs "$runs" --out "$repo/docs/results" --bench "$runs/bench.json"
-  --command "scripts/ebslam3d_experiment.sh")
+  --command "scripts/results/ebslam3d_experiment.sh")
 "${report[@]}"  # main table and sweeps (freiburg1_desk seeds 1-2)
 # K = 10 is the K sweep's best on the tuning half in the published run: checked on the held-out half.
 "${report[@]}" --check-k 10

@@ -4,9 +4,9 @@
 # evaluates the depth fusion on 8 s of each shared freiburg1 hand-held trajectory
 # (dedvs_fusion_evaluate), runs the fusion benchmark and writes the page. About 3-5 min on a
 # loaded 2-core machine.
-#   [SHARED_DATA=../shared/data] scripts/dedvs_experiment.sh [BUILD_DIR] [RUNS_DIR]
+#   [SHARED_DATA=../shared/data] scripts/results/dedvs_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
-repo="$(cd "$(dirname "$0")/.." && pwd)"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-/tmp/build_ebslam_dedvs}"
 runs="${2:-/tmp/dedvs_runs}"
 data="${SHARED_DATA:-$repo/../shared/data}/tum-groundtruth"
@@ -23,4 +23,4 @@ cmake --build "$build" -j2 --target ebslam_dedvs_simulate ebslam_dedvs_fusion_ev
   --t-begin 2 --duration 8 --csv "$runs/fusion.csv" --fused-out "$runs/fused.txt" > "$runs/fusion.md"
 "$build/ebslam_dedvs_fusion_bench" --benchmark_repetitions=3 \
   --benchmark_report_aggregates_only=true > "$runs/bench.txt"
-/usr/bin/python3 "$repo/scripts/dedvs_report.py" "$runs" --out "$repo/docs/results"
+/usr/bin/python3 "$repo/scripts/results/dedvs_report.py" "$runs" --out "$repo/docs/results"

@@ -259,7 +259,7 @@ def git_head():
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True, help="output folder (docs/results)")
-    parser.add_argument("--command", default="src/dasp/tools/make_dasp_results.sh",
+    parser.add_argument("--command", default="scripts/results/make_dasp_results.sh",
                         help="command line to quote in the report")
     parser.add_argument("--source", default=None,
                         help="which code produced the numbers (default: the git HEAD commit)")
@@ -557,7 +557,7 @@ def main():
                 f"simulated L1 read misses grow x4.3 to x4.9: the work is linear, the memory "
                 f"accesses it makes hit the caches less often on larger frames.\n")
     md.append("## How to regenerate\n")
-    md.append("```\nsrc/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
+    md.append("```\nscripts/results/make_dasp_results.sh [build_dir] [data_dir]\n```\n"
               "builds `dasp_evaluate` and `dasp_dasp_bench` (RelWithDebInfo) in `build_dir` (default "
               "/tmp/build_dasp_results), runs it on all frames for K in {250, 500, 1000, 2000} "
               "(DASP, ASP_RGB, ASP_RGBD, SLIC, SEEDS in one run, DASP with weight_depth 0.25 and 1 "

@@ -5,10 +5,10 @@
 # freiburg1_desk and robot freiburg2_pioneer_360; 30 frames at 30 Hz from 5 s into the
 # trajectory, motion scaled by 0.3, Kinect-like noise seeded per sequence), runs t-DASP and
 # independent s-DASP over them, runs the 1000-frame stream bench and writes the report.
-# Usage: src/dasp/tools/make_tdasp_results.sh [build_dir] [data_dir]
+# Usage: scripts/results/make_tdasp_results.sh [build_dir] [data_dir]
 #   STREAM_FRAMES=n  length of the bench stream (default 1000).
 set -euo pipefail
-REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD="${1:-/tmp/build_tdasp_results}"
 DATA="${2:-${REPO}/../shared/data}"
 STREAM_FRAMES="${STREAM_FRAMES:-1000}"
@@ -34,5 +34,5 @@ done
   | tee "${EVAL}/tdasp.log"
 "${BUILD}/dasp_tdasp_bench" --stream_frames="${STREAM_FRAMES}" \
   --stream_csv="${EVAL}/stream.csv" | tee "${EVAL}/bench.log"
-/usr/bin/python3 "${REPO}/src/dasp/tools/make_tdasp_results.py" --eval "${EVAL}" \
-  --out "${REPO}/docs/results" --command "src/dasp/tools/make_tdasp_results.sh"
+/usr/bin/python3 "${REPO}/scripts/results/make_tdasp_results.py" --eval "${EVAL}" \
+  --out "${REPO}/docs/results" --command "scripts/results/make_tdasp_results.sh"

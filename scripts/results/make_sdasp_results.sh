@@ -4,11 +4,11 @@
 # frames of ../shared/data/osd/learn with per-frame counts, chooses every method's parameters by
 # cross-validation over the frames (sdasp_crossval.py), runs the bench, draws example pictures and
 # the worst frames, writes the report. Everything runs single-threaded, one job after the other.
-# Usage: src/dasp/tools/make_sdasp_results.sh [build_dir] [data_dir]
+# Usage: scripts/results/make_sdasp_results.sh [build_dir] [data_dir]
 # REUSE_GRIDS=1 keeps grid/LCCP evaluations already in build_dir/sdasp_eval (they do not depend on
 # the library defaults; the defaults run, bench and pictures are always redone).
 set -euo pipefail
-REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD="${1:-/tmp/build_sdasp_results}"
 DATA="${2:-${REPO}/../shared/data/osd/learn}"
 EVAL="${BUILD}/sdasp_eval"
@@ -41,7 +41,7 @@ grid lccp.json --methods LCCP --lccp-seed-resolutions 0.015,0.02,0.03
 grid lccp_tvoxel.json --methods LCCP --lccp-seed-resolutions 0.015,0.02,0.03 \
   --lccp-single-camera-transform
 # Cross-validated choice (5 folds by frame index mod 5; even/odd both ways) of every method.
-/usr/bin/python3 "${REPO}/src/dasp/tools/sdasp_crossval.py" "${EVAL}/grid_sdasp.json" \
+/usr/bin/python3 "${REPO}/scripts/results/sdasp_crossval.py" "${EVAL}/grid_sdasp.json" \
   "${EVAL}/grid_sslic.json" "${EVAL}/lccp.json" "${EVAL}/lccp_tvoxel.json" \
   --min-color-weight 4 --json "${EVAL}/crossval.json" | tee "${EVAL}/crossval.txt"
 # Adaptive against global cut: five repetitions, interleaved at random, medians.
@@ -97,5 +97,5 @@ for f in ${WORST}; do
     --segment-overlay "${O}_global.png"
 done
 
-/usr/bin/python3 "${REPO}/src/dasp/tools/make_sdasp_results.py" --eval "${EVAL}" \
-  --out "${REPO}/docs/results" --command "src/dasp/tools/make_sdasp_results.sh"
+/usr/bin/python3 "${REPO}/scripts/results/make_sdasp_results.py" --eval "${EVAL}" \
+  --out "${REPO}/docs/results" --command "scripts/results/make_sdasp_results.sh"

@@ -315,7 +315,7 @@ def main():
         "segment labels that vanish (a segment merged away) are not revived later.\n")
 
     md.append("## How to regenerate\n")
-    md.append("```sh\nsrc/dasp/tools/make_tdasp_results.sh [build_dir] [data_dir]   "
+    md.append("```sh\nscripts/results/make_tdasp_results.sh [build_dir] [data_dir]   "
               "# about 15 minutes on 2 cores\n```\n")
     md.append("It builds `dasp_render_sequence`, `dasp_tdasp` and `dasp_tdasp_bench`, renders the 8 "
               "sequences, runs `dasp_tdasp` (per-frame CSV and per-sequence JSON), the bench with "

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Regenerates docs/results/dasp.md and its plots: builds dasp_evaluate, evaluates every method on
 # all frames of ../shared/data/osd/learn for K in {250, 500, 1000, 2000} and writes the report.
-# Usage: src/dasp/tools/make_dasp_results.sh [build_dir] [data_dir]
+# Usage: scripts/results/make_dasp_results.sh [build_dir] [data_dir]
 #   JOBS=n   frames evaluated in parallel (default 2); each method itself runs single-threaded.
 #   KS="..." superpixel counts (default "250 500 1000 2000").
 set -euo pipefail
-REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD="${1:-/tmp/build_dasp_results}"
 DATA="${2:-${REPO}/../shared/data/osd/learn}"
 JOBS="${JOBS:-2}"
@@ -55,9 +55,9 @@ done
 # Speed: every stage, DASP against OpenCV SLIC on the same frame in the same run.
 DASP_BENCH_FRAME_DIR="${DATA}" "${BUILD}/dasp_dasp_bench" --benchmark_repetitions=5 \
   --benchmark_report_aggregates_only=true --benchmark_min_time=0.2 > "${BUILD}/bench.txt"
-/usr/bin/python3 "${REPO}/src/dasp/tools/make_dasp_results.py" --out "${REPO}/docs/results" \
+/usr/bin/python3 "${REPO}/scripts/results/make_dasp_results.py" --out "${REPO}/docs/results" \
   --bench "${BUILD}/bench.txt" --original-count "${ORIGINAL_COUNT}" \
-  --command "src/dasp/tools/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
+  --command "scripts/results/make_dasp_results.sh" "${BUILD}/eval/main" "${BUILD}/eval/vccs" \
   "${BUILD}/eval/dasp_wd0.25" "${BUILD}/eval/dasp_wd1" "${BUILD}/eval/dasp_jump0.05" \
   "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}" "${BUILD}/eval/dasp_slant2" "${BUILD}/eval/dasp_slant3" \
   "${BUILD}/eval/dasp_it10" "${BUILD}/eval/dasp_it20" "${BUILD}/eval/dasp_exp1" \
