@@ -6,7 +6,7 @@
 # on and off, 10 seeds, into RUNS_DIR/noise), the speed benchmark (ebslam_ebpf_bench) and writes
 # the report. About 10-15 min on a loaded 2-core machine for the first part; the noise runs take
 # about 25 min of CPU (runs that diverge are the slowest), several times that on a loaded machine.
-# The 3 Hz rows now on the page came from a shorter run merged into the page's section:
+# One noise rate alone (the 3 Hz rows of the page come from such a run), into the page's blocks:
 #   ebslam_experiment_events2d --data <shared>/data --out <dir>/r3 --noise-only --noise-rates 3 --noise-seeds 5
 #   scripts/results/events2d_report.py <dir> --noise-section-only   (<dir>/*/noise_runs.csv, denoise.csv)
 #   scripts/results/events2d_experiment.sh [BUILD_DIR] [RUNS_DIR]
