@@ -6,7 +6,9 @@ Every hand-held TUM ground-truth path in shared/data/tum-groundtruth (freiburg1_
 _room, freiburg2_xyz) drives the D-eDVS simulator and depth fusion (ebslam_experiment_ebslam3d
 --source dedvs; --source synthetic for the synthetic source), the first DURATION seconds of each,
 SEEDS seeds (filter and scene), default and fast sets; then sweeps of N, K, B, event share, voxel
-size and diffusion on freiburg1_desk seeds 1..SWEEP_SEEDS (the tuning half).
+size and diffusion on freiburg1_desk seeds 1..SWEEP_SEEDS (the tuning half). The page's prose is
+hand-written; this script rewrites its generated blocks (tables, plots, the reproduce command).
+`--from-results` regenerates them from RUNS/results.jsonl alone (docs/results/ebslam3d/ keeps a copy).
 """
 import argparse
 import concurrent.futures as cf
@@ -19,6 +21,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import pagegen  # noqa: E402
 
 PATHS = ["freiburg1_xyz", "freiburg1_desk", "freiburg1_room", "freiburg2_xyz"]
 DIVERGED_M = 0.10  # position RMSE above this counts as a divergence
@@ -133,63 +138,10 @@ def held_out(r):
     return not (r["path"] == "freiburg1_desk" and r["seed"] in (1, 2))
 
 
-def write_page(a, results, sweeps, sweep_path):
-    fig_dir = os.path.join(a.out, "ebslam3d")
-    os.makedirs(fig_dir, exist_ok=True)
-    main_runs = [r for r in results if r["kind"] == "main"]
+def table_8_1_blocks(a, main_runs):
+    """The table 8.1 analogue (per path, all, held-out) and the RMSE of every run."""
     lines = []
     w = lines.append
-    w("# EB-SLAM-3D: six-DOF event-based SLAM on depth events (thesis 8.3-8.4)")
-    w("")
-    w(f"Regenerate: `{a.command}` (builds the core library, runs every path below, the sweeps and")
-    w("the benchmark, and rewrites this page and its plots; about an hour on a loaded 2-core machine).")
-    w("")
-    if a.source == "dedvs":
-        w("**Data.** The depth events come from the D-eDVS simulator and its depth fusion, as the ROS pipeline")
-        w("`launch/ebslam3d_simulation.launch` runs them (`ebslam_experiment_ebslam3d --source dedvs`): a furnished room")
-        w("(`dedvs_scene.h`: walls, floor, ceiling, a table where the camera looks most, boxes, a shelf; dead-leaves")
-        w("textures) is built around each TUM ground-truth path; the rig moves along it (the path is the depth")
-        w("camera's optical frame, as in the TUM data); the eDVS (128 x 128, f = 154 px, eq. 8.1 distortion, the")
-        w("contrast-threshold event model of `event_model.h` with threshold mismatch, refractory period and")
-        w("background activity) is rendered at >= 500 Hz, the PrimeSense-like depth camera (320 x 240, 30 Hz, disparity")
-        w("noise and quantisation, holes, 12 ms clock offset) at 30 Hz; `DepthEventFusion` gives each event the depth")
-        w("where its pixel's ray meets the depth frame nearest in time (the calibration is the simulated rig's).")
-        w("Events without a depth (holes, out of range, outside the depth camera's view) are dropped before the")
-        w("filter; the table gives the share kept. The filter estimates the eDVS optical frame and is scored against")
-        w("the eDVS's true path (rig path times the rig's depth_from_edvs). Scene, events and depth noise use the")
-        w("run's seed. This is a simulation: the figures say how the filter behaves on this simulator, not on the")
-        w("thesis' recorded takes.")
-    else:
-        w("**Data.** The depth events come from the core library's synthetic source (`synthetic_depth_events.h`, a")
-        w("textured box room, a geometric event model; `--source synthetic`).")
-    w("")
-    w(f"**Runs.** Every hand-held TUM path ({', '.join(p for p in PATHS if any(r['path'] == p for r in main_runs))}), the first "
-      f"{a.duration:g} s of each, seeds 1..{a.seeds} (the seed sets the filter, the room, the events and the depth noise), the default "
-      "set (N 100, K 100, B 3, all events, 1 cm voxels) and the fast set (N 25, K 100, B 5, a quarter of the events).")
-    w("Errors after the alignment of eq. 8.16-8.19 (rigid, with a time offset up to 0.2 s; `trajectory_evaluation.h`),")
-    w("rotation error eq. 8.20 as an RMS in degrees; real-time factor = event-stream duration / CPU time of")
-    w("the filter alone (one thread, `CLOCK_THREAD_CPUTIME_ID`; the simulation is not counted); memory = peak of the")
-    w("voxel map plus particles (map bound 24 MiB) and the process's peak RSS (which holds the simulator's scene")
-    w(f"and textures). A run 'diverged' if its RMSE exceeds {DIVERGED_M * 100:.0f} cm. The runs share a 2-core machine with")
-    w("other work (load 8-13 during the main table and the sweeps), which lowers the CPU-time rates; the benchmark")
-    w("at the end gives the filter's rate on a fixed synthetic stream. The ROS pipeline `launch/ebslam3d_simulation.launch`")
-    w("runs the same chain as nodelets; its rostest (`ebslam_ros/test/ebslam3d_simulation.test`) asserts a position")
-    w("RMSE below 3.5 cm on the 4.5 s freiburg1_xyz excerpt of `test/data/sample_session`.")
-    w("")
-    w("**Which data chose which parameter.** N, K, B, the event share and the voxel size of the default set are")
-    w("the thesis' (8.4) and were not tuned. The fast set (N 25, B 5, a quarter of the events) was set without")
-    w("tuning. The diffusion (1e-3 m and 1e-3 rad per event) was chosen by hand on the synthetic source")
-    w("(`--source synthetic`), first 8-10 s of freiburg1_xyz, _desk and _room, seed 1, before this simulator")
-    w("existed; nothing was re-tuned on the D-eDVS source. The sweeps below ran on freiburg1_desk seeds 1-2 (the")
-    w("tuning half); no default was changed after them, and the one value they favour clearly (K) is reported on")
-    w("the held-out half in its own table. Held out from every choice made on the D-eDVS source: seed 3 of")
-    w("freiburg1_desk and every seed of the other paths (the 'held-out' rows).")
-    w("")
-    if a.cut:
-        w("**Not run.** " + a.cut)
-        w("")
-    w("## Table 8.1 analogue")
-    w("")
     w("| path | runs | events/s (stream, with depth) | depth kept | default RMSE [cm] (mean / worst) | rot. [deg] | speed [x real time] | fast RMSE [cm] (mean / worst) | fast rot. [deg] | fast speed | map + particles [MiB] | peak RSS [MiB] | diverged (default / fast) |")
     w("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 
@@ -220,83 +172,74 @@ def write_page(a, results, sweeps, sweep_path):
     f_all = [r for r in main_runs if r["preset"] == "fast"]
     row("all", d_all, f_all)
     row("held-out", [r for r in d_all if held_out(r)], [r for r in f_all if held_out(r)])
-    w("")
-    w("Per run (default / fast, seeds in order): " + "; ".join(
+    per_run = "Per run (default / fast, seeds in order): " + "; ".join(
         "%s %s" % (p, " ".join("%.1f/%.1f" % tuple(
             100 * next((r["rmse_m"] for r in main_runs if r["path"] == p and r["preset"] == pr and r["seed"] == s),
                        float("nan")) for pr in ("default", "fast")) for s in range(1, a.seeds + 1)))
-        for p in PATHS if any(r["path"] == p for r in main_runs)) + " cm.")
+        for p in PATHS if any(r["path"] == p for r in main_runs)) + " cm."
+    return {"table-8-1": lines, "per-run": per_run}
+
+
+def tuned_block(tuned, d_all):
+    """The K chosen on the tuning half against K = 100 on the held-out half."""
+    k = tuned[0]["value"]
+    lines = []
+    w = lines.append
+    w("| path | runs | RMSE K = 100 [cm] (mean / worst) | RMSE K = %g [cm] (mean / worst) | rot. K = %g [deg] | speed K = %g [x real time] | diverged K = 100 / K = %g |" % (k, k, k, k))
+    w("|---|---|---|---|---|---|---|")
+    for p in PATHS + ["all held-out"]:
+        t = [r for r in tuned if p == "all held-out" or r["path"] == p]
+        if not t:
+            continue
+        keys = {(r["path"], r["seed"]) for r in t}
+        d = [r for r in d_all if (r["path"], r["seed"]) in keys]
+        w("| %s | %d | %.2f / %.2f | %.2f / %.2f | %.2f | %.1f | %d / %d |" % (
+            p, len(t), 100 * mean([r["rmse_m"] for r in d]), 100 * max(r["rmse_m"] for r in d),
+            100 * mean([r["rmse_m"] for r in t]), 100 * max(r["rmse_m"] for r in t),
+            mean([r["rotation_rmse_deg"] for r in t]), mean([r["realtime_factor"] for r in t]),
+            sum(r["rmse_m"] > DIVERGED_M for r in d), sum(r["rmse_m"] > DIVERGED_M for r in t)))
     w("")
-    w("Thesis table 8.1 (real takes, 2013 hardware): default 3.1-13.4 cm at 1.4-2.5x real time, fast")
-    w("4.0-13.3 cm at 16-27x, 14-27 MB.")
-    w("")
-    tuned = [r for r in results if r["kind"] == "tuned"]
-    if tuned:
-        k = tuned[0]["value"]
-        w(f"## K = {k:g}: chosen on the tuning half, reported on the held-out half")
-        w("")
-        w(f"The K sweep below (freiburg1_desk seeds 1-2) favours K = {k:g} over the thesis' 100 at the same speed; with the")
-        w(f"default set otherwise, K = {k:g} on the held-out runs (same seeds and streams as the table above):")
-        w("")
-        w("| path | runs | RMSE K = 100 [cm] (mean / worst) | RMSE K = %g [cm] (mean / worst) | rot. K = %g [deg] | speed K = %g [x real time] | diverged K = 100 / K = %g |" % (k, k, k, k))
-        w("|---|---|---|---|---|---|---|")
-        for p in PATHS + ["all held-out"]:
-            t = [r for r in tuned if p == "all held-out" or r["path"] == p]
-            if not t:
-                continue
-            keys = {(r["path"], r["seed"]) for r in t}
-            d = [r for r in d_all if (r["path"], r["seed"]) in keys]
-            w("| %s | %d | %.2f / %.2f | %.2f / %.2f | %.2f | %.1f | %d / %d |" % (
-                p, len(t), 100 * mean([r["rmse_m"] for r in d]), 100 * max(r["rmse_m"] for r in d),
-                100 * mean([r["rmse_m"] for r in t]), 100 * max(r["rmse_m"] for r in t),
-                mean([r["rotation_rmse_deg"] for r in t]), mean([r["realtime_factor"] for r in t]),
-                sum(r["rmse_m"] > DIVERGED_M for r in d), sum(r["rmse_m"] > DIVERGED_M for r in t)))
-        w("")
-        t_all = [r["rmse_m"] for r in tuned]
-        d_same = [r["rmse_m"] for r in d_all if (r["path"], r["seed"]) in {(t["path"], t["seed"]) for t in tuned}]
-        better = sum(t < d for t, d in zip(
-            [r["rmse_m"] for r in sorted(tuned, key=lambda r: (r["path"], r["seed"]))],
-            [r["rmse_m"] for r in sorted([r for r in d_all if (r["path"], r["seed"]) in
-                                          {(t["path"], t["seed"]) for t in tuned}], key=lambda r: (r["path"], r["seed"]))]))
-        w(f"Held-out mean RMSE {100 * mean(t_all):.2f} cm with K = {k:g} against {100 * mean(d_same):.2f} cm with K = 100; "
-          f"K = {k:g} is better on {better} of {len(t_all)} runs. "
-          + ("The choice does not carry over to the held-out half, so " if mean(t_all) >= mean(d_same) else "")
-          + "the configuration default stays the thesis' K = 100; `-K` sets it per run. (The speed columns of the two")
-        w("tables ran at different machine loads; the filter's CPU time per event depends little on K.)")
-        w("")
-    if d_all and f_all:
-        w("## Targets")
-        w("")
-        worst = max(r["rmse_m"] for r in d_all)
-        w(f"- Accuracy, position RMSE <= 3 cm on every run at the default set, no divergence: worst {100 * worst:.2f} cm over "
-          f"{len(d_all)} runs, {sum(r['rmse_m'] <= 0.03 for r in d_all)} of {len(d_all)} within 3 cm -> "
-          + ("**met**" if worst <= 0.03 else "**not met**") + f"; divergences: {sum(r['rmse_m'] > DIVERGED_M for r in d_all)} default, "
-          f"{sum(r['rmse_m'] > DIVERGED_M for r in f_all)} fast.")
-        w(f"- Speed, >= 20x real time at the default set: {min(r['realtime_factor'] for r in d_all):.1f}x to "
-          f"{max(r['realtime_factor'] for r in d_all):.1f}x -> "
-          + ("**met**" if min(r['realtime_factor'] for r in d_all) >= 20 else "**not met**")
-          + f"; fast set >= 200x: {min(r['realtime_factor'] for r in f_all):.1f}x to {max(r['realtime_factor'] for r in f_all):.1f}x -> "
-          + ("**met**" if min(r['realtime_factor'] for r in f_all) >= 200 else "**not met**") + ".")
-        w(f"  The real-time factor is the processing rate over the stream's event rate; the filter processes "
-          f"{min(r['events_per_s'] for r in d_all) / 1e3:.0f}k-{max(r['events_per_s'] for r in d_all) / 1e3:.0f}k events/s (default)")
-        w(f"  and {min(r['events_per_s'] for r in f_all) / 1e3:.0f}k-{max(r['events_per_s'] for r in f_all) / 1e3:.0f}k events/s (fast, counting every streamed event), and this")
-        w(f"  simulator streams {min(r['events_per_s_stream'] for r in d_all) / 1e3:.0f}k-{max(r['events_per_s_stream'] for r in d_all) / 1e3:.0f}k events/s with a depth: a textured room seen by a moving 128 x 128")
-        w("  sensor fires far more events than the thesis' recordings.")
-        w("- What was tried where a target is missed: the sweeps below (tuning half) trade accuracy against speed")
-        w("  along N, the event share and the voxel size (more particles or events: lower error, proportionally slower;")
-        w("  the fast set's quarter of the events and 25 particles lose freiburg1_desk and _room); the diffusion has its")
-        w("  optimum at the default; the K the sweep favours did not carry over to the held-out half (above). The")
-        w("  default-set divergences are all on freiburg1_room, the path with the fastest turns and the most events per second.")
-        mem = [r["peak_memory_bytes"] for r in main_runs if "peak_memory_bytes" in r]
-        rss = [r["peak_rss_bytes"] for r in main_runs if "peak_rss_bytes" in r]
-        if mem:
-            w(f"- Memory <= 30 MB per run: map + particles peak {max(mem) / 2**20:.1f} MiB -> "
-              + ("**met**" if max(mem) <= 30e6 else "**not met**")
-              + (f"; the whole process (simulator included) peaks at {max(rss) / 2**20:.0f} MiB RSS." if rss else "."))
-        w("")
-    # Trajectory plots.
-    w("## Paths against ground truth (default set, seed 1)")
-    w("")
+    t_all = [r["rmse_m"] for r in tuned]
+    same = {(t["path"], t["seed"]) for t in tuned}
+    d_same = [r["rmse_m"] for r in d_all if (r["path"], r["seed"]) in same]
+    better = sum(t < d for t, d in zip(
+        [r["rmse_m"] for r in sorted(tuned, key=lambda r: (r["path"], r["seed"]))],
+        [r["rmse_m"] for r in sorted([r for r in d_all if (r["path"], r["seed"]) in same],
+                                     key=lambda r: (r["path"], r["seed"]))]))
+    w(f"Held-out mean RMSE {100 * mean(t_all):.2f} cm with K = {k:g} against {100 * mean(d_same):.2f} cm "
+      f"with K = 100; K = {k:g} is better on {better} of {len(t_all)} runs.")
+    return {"tuned": lines}
+
+
+def summary_block(main_runs):
+    """Accuracy, speed and memory of the main runs in a few lines."""
+    d_all = [r for r in main_runs if r["preset"] == "default"]
+    f_all = [r for r in main_runs if r["preset"] == "fast"]
+    lines = []
+    w = lines.append
+    worst = max(r["rmse_m"] for r in d_all)
+    w(f"- Position RMSE at the default set: worst {100 * worst:.2f} cm over {len(d_all)} runs, "
+      f"{sum(r['rmse_m'] <= 0.03 for r in d_all)} of {len(d_all)} within 3 cm; divergences: "
+      f"{sum(r['rmse_m'] > DIVERGED_M for r in d_all)} default, {sum(r['rmse_m'] > DIVERGED_M for r in f_all)} fast.")
+    w(f"- Real time: {min(r['realtime_factor'] for r in d_all):.1f}x to {max(r['realtime_factor'] for r in d_all):.1f}x "
+      f"at the default set, {min(r['realtime_factor'] for r in f_all):.1f}x to "
+      f"{max(r['realtime_factor'] for r in f_all):.1f}x at the fast set. The filter processes "
+      f"{min(r['events_per_s'] for r in d_all) / 1e3:.0f}k-{max(r['events_per_s'] for r in d_all) / 1e3:.0f}k events/s "
+      f"(default) and {min(r['events_per_s'] for r in f_all) / 1e3:.0f}k-{max(r['events_per_s'] for r in f_all) / 1e3:.0f}k "
+      f"events/s (fast, counting every streamed event); the simulator streams "
+      f"{min(r['events_per_s_stream'] for r in d_all) / 1e3:.0f}k-{max(r['events_per_s_stream'] for r in d_all) / 1e3:.0f}k "
+      "events/s with a depth.")
+    mem = [r["peak_memory_bytes"] for r in main_runs if "peak_memory_bytes" in r]
+    rss = [r["peak_rss_bytes"] for r in main_runs if "peak_rss_bytes" in r]
+    if mem:
+        w(f"- Memory: map + particles peak at {max(mem) / 2**20:.1f} MiB"
+          + (f"; the whole process (simulator included) at {max(rss) / 2**20:.0f} MiB RSS." if rss else "."))
+    return {"summary": lines}
+
+
+def path_plots(main_runs, fig_dir):
+    """Estimated against true path per TUM path (default, seed 1); {} without the runs' files."""
+    lines = []
     for p in PATHS:
         r = next((r for r in main_runs if r["path"] == p and r["preset"] == "default" and r["seed"] == 1), None)
         if not r or not r.get("prefix") or not os.path.exists(r["prefix"] + "_errors.csv"):
@@ -316,36 +259,38 @@ def write_page(a, results, sweeps, sweep_path):
         fig.tight_layout()
         fig.savefig(os.path.join(fig_dir, f"path_{p}.png"), dpi=80)
         plt.close(fig)
-        w(f"![{p}](ebslam3d/path_{p}.png)")
-        w("")
-    # Map plot.
+        lines += [f"![{p}](ebslam3d/path_{p}.png)", ""]
+    return {"paths": lines} if lines else {}
+
+
+def map_plot(main_runs, fig_dir):
+    """Occurrence-map voxels of freiburg1_desk (default, seed 1); {} without the run's map."""
     r = next((r for r in main_runs if r["path"] == "freiburg1_desk" and r["preset"] == "default" and r["seed"] == 1), None)
-    if r and r.get("prefix") and os.path.exists(r["prefix"] + "_map.xyz"):
-        pts = [tuple(map(float, l.split())) for l in open(r["prefix"] + "_map.xyz")]
-        pts = pts[:: max(1, len(pts) // 60000)]
-        fig, ax = plt.subplots(1, 2, figsize=(10, 4.5))
-        for k, (i, j) in enumerate([(0, 2), (0, 1)]):
-            ax[k].scatter([q[i] for q in pts], [q[j] for q in pts], s=0.2, c="k", alpha=0.3)
-            ax[k].set_xlabel("xyz"[i] + " [m] (map = first eDVS frame: x right, y down, z forward)")
-            ax[k].set_ylabel("xyz"[j] + " [m]")
-            ax[k].axis("equal")
-        ax[1].invert_yaxis()
-        fig.suptitle("freiburg1_desk, default, seed 1: occurrence-map voxels with O > 1 (top view, front view)")
-        fig.tight_layout()
-        fig.savefig(os.path.join(fig_dir, "map_freiburg1_desk.png"), dpi=80)
-        plt.close(fig)
-        w("## Map")
-        w("")
-        w("![map](ebslam3d/map_freiburg1_desk.png)")
-        w("")
-    # Sweeps.
+    if not (r and r.get("prefix") and os.path.exists(r["prefix"] + "_map.xyz")):
+        return {}
+    pts = [tuple(map(float, l.split())) for l in open(r["prefix"] + "_map.xyz")]
+    pts = pts[:: max(1, len(pts) // 60000)]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4.5))
+    for k, (i, j) in enumerate([(0, 2), (0, 1)]):
+        ax[k].scatter([q[i] for q in pts], [q[j] for q in pts], s=0.2, c="k", alpha=0.3)
+        ax[k].set_xlabel("xyz"[i] + " [m] (map = first eDVS frame: x right, y down, z forward)")
+        ax[k].set_ylabel("xyz"[j] + " [m]")
+        ax[k].axis("equal")
+    ax[1].invert_yaxis()
+    fig.suptitle("freiburg1_desk, default, seed 1: occurrence-map voxels with O > 1 (top view, front view)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(fig_dir, "map_freiburg1_desk.png"), dpi=80)
+    plt.close(fig)
+    return {"map": "![map](ebslam3d/map_freiburg1_desk.png)"}
+
+
+def sweep_block(a, results, sweeps, sweep_path, fig_dir):
+    """One table per swept parameter (mean RMSE, real-time factor, runs) and their plot."""
     sweep_runs = [r for r in results if r["kind"] == "sweep"]
     seeds = sorted(set(r["seed"] for r in sweep_runs))
-    w(f"## Parameter sweeps (fig. 8.12, B.15, B.16) on {sweep_path}, first {a.sweep_duration:g} s, "
-      f"seeds {', '.join(map(str, seeds)) if seeds else 'none'}")
-    w("")
-    w("One parameter varied, the others at the default set; means over the seeds. 'Best' is the value with the")
-    w("lowest mean RMSE on this tuning half; the defaults were not changed (see above).")
+    lines = []
+    w = lines.append
+    w(f"On {sweep_path}, first {a.sweep_duration:g} s, seeds {', '.join(map(str, seeds)) if seeds else 'none'}.")
     w("")
     names = list(sweeps)
     fig, axes = plt.subplots(len(names), 2, figsize=(9, 2.4 * len(names)))
@@ -369,11 +314,10 @@ def write_page(a, results, sweeps, sweep_path):
             if name != "event share":
                 ax.set_xscale("log")
         best = vals[min(range(len(vals)), key=lambda i: rm[i])]
-        w(f"| {name} | " + " | ".join(f"{v:g}" for v in vals) + " |")
-        w("|---|" + "---|" * len(vals))
-        w("| RMSE [cm] | " + " | ".join(f"{x:.2f}" for x in rm) + " |")
-        w("| x real time | " + " | ".join(f"{x:.1f}" for x in rt) + " |")
-        w("| runs | " + " | ".join(str(x) for x in n) + " |")
+        lines += pagegen.table([name] + [f"{v:g}" for v in vals],
+                               [["RMSE [cm]"] + [f"{x:.2f}" for x in rm],
+                                ["x real time"] + [f"{x:.1f}" for x in rt],
+                                ["runs"] + [str(x) for x in n]])
         w("")
         w(f"Best on the tuning half: {best:g}.")
         w("")
@@ -381,25 +325,46 @@ def write_page(a, results, sweeps, sweep_path):
     fig.savefig(os.path.join(fig_dir, "sweeps.png"), dpi=70)
     plt.close(fig)
     w("![sweeps](ebslam3d/sweeps.png)")
-    w("")
-    if a.bench and os.path.exists(a.bench):
-        b = json.load(open(a.bench))
-        w("## Benchmark (`ebslam_ebslam3d_bench`)")
-        w("")
-        w("The filter alone on a synthetic 4 s path (0.4 m, 0.35 rad turn, starting and ending at rest) in the")
-        w("synthetic box room (`synthetic_depth_events.h`); CPU time of the process; one core.")
-        w("")
-        w("| benchmark | events/s | stream events/s | x real time | thesis x real time | peak map [MiB] |")
-        w("|---|---|---|---|---|---|")
-        for bm in b["benchmarks"]:
-            if bm.get("run_type") == "aggregate" and bm.get("aggregate_name") != "median":
-                continue
-            w("| %s | %.0fk | %.1fk | %.1f | %s | %.1f |" % (
-                bm["name"], bm["events_per_s"] / 1e3, bm["stream_events_per_s"] / 1e3, bm["realtime_factor"],
-                "%g" % bm["thesis_realtime_factor"] if bm["thesis_realtime_factor"] else "-", bm["peak_map_mib"]))
-        w("")
-    with open(os.path.join(a.out, "ebslam3d.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
+    return {"sweeps": lines}
+
+
+def bench_block(bench_path):
+    """Medians of ebslam_ebslam3d_bench ({} without it)."""
+    if not bench_path or not os.path.exists(bench_path):
+        return {}
+    rows = []
+    for bm in json.load(open(bench_path))["benchmarks"]:
+        if bm.get("run_type") == "aggregate" and bm.get("aggregate_name") != "median":
+            continue
+        rows.append(["%s" % bm["name"], "%.0fk" % (bm["events_per_s"] / 1e3),
+                     "%.1fk" % (bm["stream_events_per_s"] / 1e3), "%.1f" % bm["realtime_factor"],
+                     "%g" % bm["thesis_realtime_factor"] if bm["thesis_realtime_factor"] else "-",
+                     "%.1f" % bm["peak_map_mib"]])
+    return {"bench": pagegen.table(["benchmark", "events/s", "stream events/s", "x real time",
+                                    "thesis x real time", "peak map [MiB]"], rows)}
+
+
+def write_page(a, results, sweeps, sweep_path):
+    """Rewrites the generated blocks of OUT/ebslam3d.md (the prose there describes the D-eDVS source)."""
+    fig_dir = os.path.join(a.out, "ebslam3d")
+    os.makedirs(fig_dir, exist_ok=True)
+    main_runs = [r for r in results if r["kind"] == "main"]
+    blocks = {"reproduce": f"`{a.command}`",
+              "runs": f"Every hand-held TUM path ({', '.join(p for p in PATHS if any(r['path'] == p for r in main_runs))}), "
+                      f"the first {a.duration:g} s of each, seeds 1..{a.seeds}.",
+              "not-run": ("**Not run.** " + a.cut) if a.cut else ""}
+    blocks.update(table_8_1_blocks(a, main_runs))
+    tuned = [r for r in results if r["kind"] == "tuned"]
+    d_all = [r for r in main_runs if r["preset"] == "default"]
+    if tuned:
+        blocks.update(tuned_block(tuned, d_all))
+    if d_all and any(r["preset"] == "fast" for r in main_runs):
+        blocks.update(summary_block(main_runs))
+    blocks.update(path_plots(main_runs, fig_dir))
+    blocks.update(map_plot(main_runs, fig_dir))
+    blocks.update(sweep_block(a, results, sweeps, sweep_path, fig_dir))
+    blocks.update(bench_block(a.bench))
+    pagegen.update_page(os.path.join(a.out, "ebslam3d.md"), blocks)
 
 
 if __name__ == "__main__":
