@@ -16,7 +16,6 @@ import json
 import os
 import shutil
 import sys
-from collections import defaultdict
 
 import matplotlib
 

@@ -10,7 +10,6 @@ import csv
 import json
 import os
 import sys
-from collections import defaultdict
 
 import matplotlib
 
