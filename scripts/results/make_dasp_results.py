@@ -89,15 +89,9 @@ def fmt(v, digits):
 def variant_table(rows, ks, methods, columns):
     """Markdown table with one line per K and method (in the order given) that has a row;
     columns: (column, header, digits)."""
-    lines = ["| K | method | " + " | ".join(h for _, h, _ in columns) + " |",
-             "|---|---|" + "---|" * len(columns)]
-    for k in ks:
-        for m in methods:
-            r = rows.get((m, k))
-            if r:
-                lines.append(f"| {k} | {m} | " +
-                             " | ".join(fmt(r.get(c, ""), d) for c, _, d in columns) + " |")
-    return lines + [""]
+    return pagegen.table(["K", "method"] + [h for _, h, _ in columns],
+                         [[k, m] + [fmt(r.get(c, ""), d) for c, _, d in columns]
+                          for k in ks for m in methods for r in [rows.get((m, k))] if r]) + [""]
 
 
 # The reference row of the thesis author's original DASP (K = 1000, 923 superpixels in the

@@ -158,7 +158,7 @@ def worst_block(cv, fams, ev, pictures):
                 shutil.copy(src, os.path.join(pictures, name))
                 cells.append("![%s %s](sdasp/%s)" % (fr, kind, name))
         lines += ["**%s**, F1 %s (%s)." % (fr, fmt(frame_f1[i]), fmt(gf[i])), "",
-                  "| " + " | ".join(cells) + " |", "|" + "---|" * len(cells), ""]
+                  pagegen.table_row(cells), "|" + "---|" * len(cells), ""]
     return {"worst": lines}
 
 
@@ -257,7 +257,7 @@ def examples_block(ev, pictures):
         cells = ["![%s %s](sdasp/%s_%s.png)" % (fr, k, fr, k)
                  for k in ("superpixels", "ucm", "sdasp", "sslic", "lccp")
                  if "%s_%s.png" % (fr, k) in examples]
-        lines.append("| " + " | ".join(cells) + " |")
+        lines.append(pagegen.table_row(cells))
         if fr == frames[0]:
             lines.append("|" + "---|" * len(cells))
     return {"examples": lines}

@@ -7,12 +7,15 @@ update_page() rewrites the body of the named blocks in place and leaves everythi
 import re
 
 
+def table_row(cells):
+    """One Markdown table line; an empty cell is written as `| |`."""
+    return "|" + "|".join(f" {c} " if str(c) else " " for c in cells) + "|"
+
+
 def table(header, rows):
     """Markdown table lines: a header line, the `|---|` line, one line per row (cells are
     strings, or values printed with str())."""
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return lines
+    return [table_row(header), "|" + "---|" * len(header)] + [table_row(row) for row in rows]
 
 
 def _markers(name):
