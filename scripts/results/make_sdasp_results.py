@@ -2,13 +2,15 @@
 """Rewrites the generated blocks of docs/results/sdasp.md (tables, plots, pictures) from the
 dasp_sdasp evaluate/bench output; the prose of the page is hand-written.
 
-Usage: make_sdasp_results.py --eval EVAL_DIR --out docs/results [--command "..."]
+Usage: make_sdasp_results.py (--eval EVAL_DIR | --from-page-data) --out docs/results [--command "..."]
 
 EVAL_DIR holds main.json (s-DASP and s-SLIC at the library defaults), grid_sdasp.json and
 grid_sslic.json (parameter grids on the same superpixels), lccp.json and lccp_tvoxel.json (PCL
 LCCP without / with the single-camera voxel transform), crossval.json (sdasp_crossval.py),
 bench.txt (dasp_sdasp_bench output), the example pictures examples/<frame>_<kind>.png and the
-worst frames worst/<frame>_{adaptive,global,ucm}.png written by make_sdasp_results.sh.
+worst frames worst/<frame>_{adaptive,global,ucm}.png written by make_sdasp_results.sh. What the
+page reads of them is kept in docs/results/sdasp/page_data.json, from which --from-page-data
+rewrites the page without the evaluation.
 """
 import argparse
 import json
@@ -143,7 +145,8 @@ def crossval_blocks(fams):
 
 
 def worst_block(cv, fams, ev, pictures):
-    """The three frames with the lowest held-out F1 of the adaptive cut, with their pictures."""
+    """The three frames with the lowest held-out F1 of the adaptive cut, with their pictures
+    (copied from EVAL_DIR/worst when ev is given, else those beside the page)."""
     frame_f1 = fams[ADA]["crossval"][CV5]["frame_f1"]
     gf = fams[GLO]["crossval"][CV5]["frame_f1"]
     order = sorted(range(len(frame_f1)), key=lambda i: frame_f1[i])
@@ -153,9 +156,11 @@ def worst_block(cv, fams, ev, pictures):
         cells = []
         for kind in ("adaptive", "global", "ucm"):
             name = "worst_%s_%s.png" % (fr, kind)
-            src = os.path.join(ev, "worst", "%s_%s.png" % (fr, kind))
-            if os.path.exists(src):
-                shutil.copy(src, os.path.join(pictures, name))
+            if ev:
+                src = os.path.join(ev, "worst", "%s_%s.png" % (fr, kind))
+                if os.path.exists(src):
+                    shutil.copy(src, os.path.join(pictures, name))
+            if os.path.exists(os.path.join(pictures, name)):
                 cells.append("![%s %s](sdasp/%s)" % (fr, kind, name))
         lines += ["**%s**, F1 %s (%s)." % (fr, fmt(frame_f1[i]), fmt(gf[i])), "",
                   pagegen.table_row(cells), "|" + "---|" * len(cells), ""]
@@ -234,7 +239,7 @@ def grid_blocks(grid_sdasp, sslic_best, sslic_valid_best):
     return {
         "grid-size": "%d graph/spectral settings on the same DASP superpixels, Theta 4; each with "
                      "every threshold of the curve and %d settings of the adaptive cut." % (
-                         len(grid_sdasp["results"]), len(grid_sdasp["results"][0]["adaptive"])),
+                         len(grid_sdasp["results"]), grid_sdasp["results"][0]["adaptive_settings"]),
         "grid": pagegen.table(["lambda_c", "lambda_v", "lambda_n", "k", "Theta",
                                "ODS F1 (global)", "ODS threshold", "best adaptive cut F1",
                                "OIS F1"], rows),
@@ -247,10 +252,15 @@ def grid_blocks(grid_sdasp, sslic_best, sslic_valid_best):
 
 
 def examples_block(ev, pictures):
-    """Copies the example pictures beside the page; one table row per frame."""
-    examples = sorted(f for f in os.listdir(os.path.join(ev, "examples")) if f.endswith(".png"))
-    for f in examples:
-        shutil.copy(os.path.join(ev, "examples", f), os.path.join(pictures, f))
+    """Copies the example pictures beside the page (without ev: uses those there); one table row
+    per frame."""
+    if ev:
+        examples = sorted(f for f in os.listdir(os.path.join(ev, "examples")) if f.endswith(".png"))
+        for f in examples:
+            shutil.copy(os.path.join(ev, "examples", f), os.path.join(pictures, f))
+    else:
+        examples = sorted(f for f in os.listdir(pictures)
+                          if f.endswith(".png") and not f.startswith("worst_"))
     frames = sorted({f.split("_")[0] for f in examples}, key=lambda s: int(re.sub(r"\D", "", s)))
     lines = []
     for fr in frames:
@@ -263,46 +273,81 @@ def examples_block(ev, pictures):
     return {"examples": lines}
 
 
+# Per-frame arrays of dasp_sdasp's JSON that the page does not read.
+PER_FRAME = ("frame_counts", "adaptive_frame_counts", "adaptive_frame_thresholds", "frame_best_f1")
+
+
+def strip(result, curve=True):
+    r = {k: v for k, v in result.items() if k not in PER_FRAME}
+    if not curve:
+        r.pop("curve_threshold_precision_recall_f1", None)
+    return r
+
+
+def read_eval(ev):
+    """What the page reads from EVAL_DIR (see the module comment), small enough to keep beside the
+    page: the grids without their curves and per-frame counts, s-SLIC's best settings only."""
+    main_run = load(os.path.join(ev, "main.json"))
+    grid_sslic = load(os.path.join(ev, "grid_sslic.json"))["results"]
+    with open(os.path.join(ev, "bench.txt")) as f:
+        bench = re.sub(r"\x1b\[[0-9;]*m", "", f.read())  # console colours
+    return {
+        "run": {k: main_run[k] for k in ("frames", "boundary_tolerance_px", "superpixel_count",
+                                         "seed")},
+        "main": [strip(r) for r in main_run["results"]],
+        "grid_sdasp": [dict(strip(r, curve=False), adaptive_settings=len(r["adaptive"]),
+                            adaptive=[max(r["adaptive"], key=lambda a: a["f1"])])
+                       for r in load(os.path.join(ev, "grid_sdasp.json"))["results"]],
+        "sslic_best": [strip(best([r for r in grid_sslic if r["method"] == m]))
+                       for m in ("sSLIC", "sSLICvalid")],
+        "lccp": [strip(r) for r in load(os.path.join(ev, "lccp.json"))["results"]],
+        "lccp_tvoxel": [strip(r) for r in load(os.path.join(ev, "lccp_tvoxel.json"))["results"]],
+        "crossval": load(os.path.join(ev, "crossval.json")),
+        "bench": bench}
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--eval", required=True)
+    source = ap.add_mutually_exclusive_group(required=True)
+    source.add_argument("--eval", help="the evaluation folder of make_sdasp_results.sh")
+    source.add_argument("--from-page-data", action="store_true",
+                        help="rewrite the page from OUT/sdasp/page_data.json (what an earlier run "
+                             "kept of its evaluation) and the pictures already beside the page")
     ap.add_argument("--out", required=True)
     ap.add_argument("--command", default="scripts/results/make_sdasp_results.sh")
     args = ap.parse_args()
-    ev = args.eval
-    main_run = load(os.path.join(ev, "main.json"))
-    grid_sdasp = load(os.path.join(ev, "grid_sdasp.json"))
-    grid_sslic = load(os.path.join(ev, "grid_sslic.json"))
-    lccp = load(os.path.join(ev, "lccp.json"))["results"]
-    lccp_tv = load(os.path.join(ev, "lccp_tvoxel.json"))["results"]
-    cv = load(os.path.join(ev, "crossval.json"))
-    with open(os.path.join(ev, "bench.txt")) as f:
-        bench = re.sub(r"\x1b\[[0-9;]*m", "", f.read())  # console colours
-    by_method = {r["method"]: r for r in main_run["results"]}
-    sdasp, sslic, sslic_valid = by_method["sDASP"], by_method["sSLIC"], by_method["sSLICvalid"]
-    sslic_best = best([r for r in grid_sslic["results"] if r["method"] == "sSLIC"])
-    sslic_valid_best = best([r for r in grid_sslic["results"] if r["method"] == "sSLICvalid"])
-    lccp_all = [("LCCP", r) for r in lccp] + [("LCCP -tvoxel", r) for r in lccp_tv]
-
-    os.makedirs(args.out, exist_ok=True)
     pictures = os.path.join(args.out, "sdasp")
     os.makedirs(pictures, exist_ok=True)
-    for old in os.listdir(pictures):
-        if old.startswith("worst_"):
-            os.remove(os.path.join(pictures, old))
-
+    page_data = os.path.join(pictures, "page_data.json")
+    if args.eval:
+        data = read_eval(args.eval)
+        with open(page_data, "w") as f:
+            json.dump(data, f, separators=(",", ":"))
+            f.write("\n")
+        for old in os.listdir(pictures):
+            if old.startswith("worst_"):
+                os.remove(os.path.join(pictures, old))
+    else:
+        data = load(page_data)
+    ev = args.eval
+    by_method = {r["method"]: r for r in data["main"]}
+    sdasp, sslic, sslic_valid = by_method["sDASP"], by_method["sSLIC"], by_method["sSLICvalid"]
+    sslic_best, sslic_valid_best = data["sslic_best"]
+    lccp_all = ([("LCCP", r) for r in data["lccp"]] +
+                [("LCCP -tvoxel", r) for r in data["lccp_tvoxel"]])
+    cv = data["crossval"]
+    run = data["run"]
     blocks = {
         "reproduce": "`%s`" % args.command,
         "data": "%d frames; boundary tolerance %d px; K = %d superpixels, seed %d." % (
-            main_run["frames"], main_run["boundary_tolerance_px"],
-            main_run["superpixel_count"], main_run["seed"]),
-        "pr": pr_plot(main_run, sdasp, sslic, sslic_best, sslic_valid_best, lccp_all, args.out)}
+            run["frames"], run["boundary_tolerance_px"], run["superpixel_count"], run["seed"]),
+        "pr": pr_plot(run, sdasp, sslic, sslic_best, sslic_valid_best, lccp_all, args.out)}
     blocks.update(crossval_blocks(cv["families"]))
     blocks.update(worst_block(cv, cv["families"], ev, pictures))
     blocks.update(defaults_blocks(sdasp, sslic, sslic_best, sslic_valid, sslic_valid_best,
                                   lccp_all))
-    blocks.update(bench_block(bench))
-    blocks.update(grid_blocks(grid_sdasp, sslic_best, sslic_valid_best))
+    blocks.update(bench_block(data["bench"]))
+    blocks.update(grid_blocks({"results": data["grid_sdasp"]}, sslic_best, sslic_valid_best))
     blocks.update(examples_block(ev, pictures))
     pagegen.update_page(os.path.join(args.out, "sdasp.md"), blocks)
 
