@@ -4,7 +4,7 @@
 //   core_pipeline_cpu <folder> [rounds] [tdasp]
 #include <dasp/dasp.h>
 #include <dasp/rgbd_io.h>
-#include <dasp/segmentation.h>
+#include <dasp/sdasp.h>
 #include <dasp/superpixel_graph.h>
 #include <dasp/tdasp.h>
 
@@ -52,9 +52,7 @@ int main(int argc, char** argv) {
         const dasp::Superpixels sp = segmenter.compute(frame);
         const double t1 = cpuMilliseconds();
         const dasp::WeightedGraph graph = dasp::buildSuperpixelGraph(sp);  // Dasp's edges
-        const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(sp, sdasp);
-        const cv::Mat segments =
-            dasp::segmentPixels(sp.labels, dasp::segmentGraph(ucg, dasp::cutThreshold(ucg, sdasp)));
+        const cv::Mat segments = dasp::computeSdasp(sp, sdasp).segments;
         checksum += graph.edges.size() + static_cast<std::size_t>(segments.rows);
         if (r > 0) dasp_ms += t1 - t0;
       }

@@ -43,6 +43,37 @@ sensor_msgs::Image makeImageMsg(const cv::Mat& mat, const std::string& encoding,
   return *cv_bridge::CvImage(header, encoding, mat).toImageMsg();
 }
 
+// The fields dasp::Superpixel and ebslam_msgs::Superpixel share, one list for both directions:
+// copy(core field, message field) for each pair (Core and Msg const on the side read from).
+template <class Core, class Msg, class Copy>
+void forSharedFields(Core& sp, Msg& msg, Copy copy) {
+  copy(sp.id, msg.id);
+  copy(sp.u, msg.u);
+  copy(sp.v, msg.v);
+  copy(sp.pixel_count, msg.pixel_count);
+  copy(sp.color.x(), msg.color.r);
+  copy(sp.color.y(), msg.color.g);
+  copy(sp.color.z(), msg.color.b);
+  copy(sp.position.x(), msg.position.x);
+  copy(sp.position.y(), msg.position.y);
+  copy(sp.position.z(), msg.position.z);
+  copy(sp.normal.x(), msg.normal.x);
+  copy(sp.normal.y(), msg.normal.y);
+  copy(sp.normal.z(), msg.normal.z);
+  copy(sp.radius_m, msg.radius);
+  copy(sp.density, msg.density);
+  copy(sp.area_m2, msg.area);
+  copy(sp.thickness, msg.thickness);
+  copy(sp.eccentricity, msg.eccentricity);
+  copy(sp.flatness, msg.flatness);
+}
+
+// Assignment with the conversion of the target's type (float <-> double, int <-> uint32).
+template <class To, class From>
+void assignConverted(To& to, const From& from) {
+  to = static_cast<To>(from);
+}
+
 }  // namespace
 
 dasp::Intrinsics toIntrinsics(const sensor_msgs::CameraInfo& info) {
@@ -184,26 +215,8 @@ ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& super
   msg.superpixels.reserve(superpixels.superpixels.size());
   for (const dasp::Superpixel& sp : superpixels.superpixels) {
     ebslam_msgs::Superpixel out;
-    out.id = static_cast<uint32_t>(sp.id);
-    out.u = sp.u;
-    out.v = sp.v;
-    out.pixel_count = static_cast<uint32_t>(sp.pixel_count);
-    out.color.r = sp.color.x();
-    out.color.g = sp.color.y();
-    out.color.b = sp.color.z();
+    forSharedFields(sp, out, [](const auto& from, auto& to) { assignConverted(to, from); });
     out.color.a = 1.0f;
-    out.position.x = sp.position.x();
-    out.position.y = sp.position.y();
-    out.position.z = sp.position.z();
-    out.normal.x = sp.normal.x();
-    out.normal.y = sp.normal.y();
-    out.normal.z = sp.normal.z();
-    out.radius = sp.radius_m;
-    out.density = sp.density;
-    out.area = sp.area_m2;
-    out.thickness = sp.thickness;
-    out.eccentricity = sp.eccentricity;
-    out.flatness = sp.flatness;
     msg.superpixels.push_back(out);
   }
   return msg;
@@ -224,21 +237,7 @@ dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
                                   std::to_string(in.id) + ": ids must index the array");
     }
     dasp::Superpixel sp;
-    sp.id = static_cast<int>(in.id);
-    sp.u = in.u;
-    sp.v = in.v;
-    sp.pixel_count = static_cast<int>(in.pixel_count);
-    sp.color = {in.color.r, in.color.g, in.color.b};
-    sp.position = {static_cast<float>(in.position.x), static_cast<float>(in.position.y),
-                   static_cast<float>(in.position.z)};
-    sp.normal = {static_cast<float>(in.normal.x), static_cast<float>(in.normal.y),
-                 static_cast<float>(in.normal.z)};
-    sp.radius_m = in.radius;
-    sp.density = in.density;
-    sp.area_m2 = in.area;
-    sp.thickness = in.thickness;
-    sp.eccentricity = in.eccentricity;
-    sp.flatness = in.flatness;
+    forSharedFields(sp, in, [](auto& to, const auto& from) { assignConverted(to, from); });
     result.superpixels.push_back(sp);
   }
   return result;

@@ -97,16 +97,17 @@ dasp::DaspConfig loadDaspConfig(const ros::NodeHandle& nh) {
   c.weight_spatial = floatParam(nh, "weight_spatial", c.weight_spatial);
   c.weight_color = floatParam(nh, "weight_color", c.weight_color);
   c.weight_normal = floatParam(nh, "weight_normal", c.weight_normal);
-  c.weight_depth = floatParam(nh, "weight_depth", c.weight_depth);
   c.window_multiple = floatParam(nh, "window_multiple", c.window_multiple);
   c.enforce_connectivity = param<bool>(nh, "enforce_connectivity", c.enforce_connectivity);
   c.min_size_fraction = floatParam(nh, "min_size_fraction", c.min_size_fraction);
-  c.max_slant_factor = floatParam(nh, "max_slant_factor", c.max_slant_factor);
-  c.depth_exponent = floatParam(nh, "depth_exponent", c.depth_exponent);
   c.normal_step_px = param<int>(nh, "normal_step_px", c.normal_step_px);
   c.depth_jump_ratio = floatParam(nh, "depth_jump_ratio", c.depth_jump_ratio);
   c.seed = static_cast<std::uint64_t>(param<int>(nh, "seed", static_cast<int>(c.seed)));
   c.threads = param<int>(nh, "threads", c.threads);
+  dasp::DaspExperimental& x = c.experimental;
+  x.weight_depth = floatParam(nh, "weight_depth", x.weight_depth);
+  x.depth_exponent = floatParam(nh, "depth_exponent", x.depth_exponent);
+  x.max_slant_factor = floatParam(nh, "max_slant_factor", x.max_slant_factor);
 
   require(c.superpixel_count >= 1, nh, "superpixel_count", "must be >= 1");
   require(std::isfinite(c.radius_m) && c.radius_m > 0.0f, nh, "radius", "must be positive [m]");
@@ -118,9 +119,9 @@ dasp::DaspConfig loadDaspConfig(const ros::NodeHandle& nh) {
           "must be positive");
   require(c.min_size_fraction >= 0.0f && c.min_size_fraction < 1.0f, nh, "min_size_fraction",
           "must be in [0, 1)");
-  require(std::isfinite(c.max_slant_factor) && c.max_slant_factor >= 1.0f, nh, "max_slant_factor",
+  require(std::isfinite(x.max_slant_factor) && x.max_slant_factor >= 1.0f, nh, "max_slant_factor",
           "must be >= 1");
-  const float a = c.depth_exponent;
+  const float a = x.depth_exponent;
   require(a == 0.0f || a == 0.5f || a == 1.0f || a == 1.5f || a == 2.0f, nh, "depth_exponent",
           "must be one of 0, 0.5, 1, 1.5, 2");
   require(c.normal_step_px >= 1, nh, "normal_step_px", "must be >= 1 [px]");

@@ -10,9 +10,10 @@
 //   segments/overlay     sensor_msgs/Image bgr8: superpixel mean colours, segment boundaries red
 //   (lazy) segments/ucm         sensor_msgs/Image 32FC1 merge levels or mono8 (~ucm_encoding)
 //   (lazy)
-// The segments are the core's: dasp::ultrametricContourGraph, then dasp::segmentGraph at
+// The segments are the core's dasp::computeSdasp: the ultrametric contour graph cut at
 // dasp::cutThreshold (~cut adaptive: per frame from its merge levels, the default; global:
 // ~threshold), on the superpixels rebuilt from the messages (float fields travel unchanged).
+#include <dasp/sdasp.h>
 #include <dasp/segmentation.h>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -116,10 +117,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     }
     last_stamp_ = header.stamp;
     dasp::Superpixels superpixels;
-    dasp::WeightedGraph ucg;
-    float threshold = 0.0f;
-    std::vector<int> node_segments;
-    cv::Mat segments;
+    dasp::SdaspSegmentation result;
     try {
       superpixels = toSuperpixels(*array, *labels_msg);
       double max_label = -1.0;
@@ -134,28 +132,27 @@ class SdaspNodelet : public nodelet::Nodelet {
       return;
     }
     try {
-      ucg = dasp::ultrametricContourGraph(superpixels, config_.sdasp);
-      threshold = dasp::cutThreshold(ucg, config_.sdasp);
-      node_segments = dasp::segmentGraph(ucg, threshold);
-      segments = dasp::segmentPixels(superpixels.labels, node_segments);
+      result = dasp::computeSdasp(superpixels, config_.sdasp);
     } catch (const std::invalid_argument& e) {
       reject(array_topic_ + ": " + e.what());
       return;
     }
     ebslam_msgs::Segmentation segmentation;
     segmentation.header = header;
-    segmentation.segment_ids.assign(node_segments.begin(), node_segments.end());
-    segmentation.ultrametric = toEdgeMsgs(ucg);
-    segmentation.threshold = threshold;
+    segmentation.segment_ids.assign(result.node_segments.begin(), result.node_segments.end());
+    segmentation.ultrametric = toEdgeMsgs(result.ucg);
+    segmentation.threshold = result.threshold;
     segmentation_pub_.publish(
         boost::make_shared<ebslam_msgs::Segmentation>(std::move(segmentation)));
-    labels_pub_.publish(boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(segments, header)));
+    labels_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toLabelImageMsg(result.segments, header)));
     if (overlay_pub_.getNumSubscribers() > 0) {
       overlay_pub_.publish(toColorImageMsg(
-          drawSegmentOverlay(superpixels.labels, superpixels.superpixels, segments), header));
+          drawSegmentOverlay(superpixels.labels, superpixels.superpixels, result.segments),
+          header));
     }
     if (ucm_pub_.getNumSubscribers() > 0) {
-      const cv::Mat ucm = dasp::ultrametricContourMap(superpixels.labels, ucg);
+      const cv::Mat ucm = dasp::ultrametricContourMap(superpixels.labels, result.ucg);
       if (config_.ucm_encoding == "mono8") {
         ucm_pub_.publish(
             cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, ucmToMono8(ucm))
@@ -166,11 +163,12 @@ class SdaspNodelet : public nodelet::Nodelet {
       }
     }
     ++processed_;
-    last_threshold_ = threshold;
-    last_segments_ = node_segments.empty()
-                         ? 0
-                         : static_cast<std::size_t>(
-                               *std::max_element(node_segments.begin(), node_segments.end()) + 1);
+    last_threshold_ = result.threshold;
+    last_segments_ =
+        result.node_segments.empty()
+            ? 0
+            : static_cast<std::size_t>(
+                  *std::max_element(result.node_segments.begin(), result.node_segments.end()) + 1);
   }
 
   void reject(const std::string& reason) {

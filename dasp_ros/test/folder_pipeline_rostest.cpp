@@ -3,6 +3,7 @@
 // same (default) parameters, which is what dasp_segment and dasp_sdasp segment compute and write.
 #include <dasp/dasp.h>
 #include <dasp/rgbd_io.h>
+#include <dasp/sdasp.h>
 #include <dasp/segmentation.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <gtest/gtest.h>

@@ -3,6 +3,7 @@
 // each is reported on /rosout naming the topic, and the next good frame is processed.
 #include <dasp/dasp.h>
 #include <dasp/rgbd_io.h>
+#include <dasp/sdasp.h>
 #include <dasp/segmentation.h>
 #include <dasp/superpixel_graph.h>
 #include <dynamic_reconfigure/Reconfigure.h>

@@ -4,7 +4,7 @@
 // throws std::invalid_argument naming the parameter when a value makes no sense.
 
 #include <dasp/dasp.h>
-#include <dasp/segmentation.h>
+#include <dasp/sdasp.h>
 #include <dasp/tdasp.h>
 #include <ros/node_handle.h>
 
@@ -47,9 +47,10 @@ struct RgbdInputConfig {
 struct DaspNodeConfig {
   RgbdInputConfig input;
   /// ~size_mode ("count" | "radius"), ~superpixel_count, ~radius [m], ~iterations,
-  /// ~weight_spatial, ~weight_color, ~weight_normal, ~weight_depth, ~window_multiple,
-  /// ~enforce_connectivity, ~min_size_fraction, ~max_slant_factor, ~depth_exponent,
-  /// ~normal_step_px, ~depth_jump_ratio, ~seed, ~threads: dasp::DaspConfig's fields
+  /// ~weight_spatial, ~weight_color, ~weight_normal, ~window_multiple, ~normal_step_px,
+  /// ~enforce_connectivity, ~min_size_fraction, ~depth_jump_ratio, ~seed, ~threads:
+  /// dasp::DaspConfig's fields; ~weight_depth, ~depth_exponent, ~max_slant_factor: its
+  /// `experimental` fields
   dasp::DaspConfig dasp;
   /// ~graph/min_border_pairs, ~graph/weight_color, ~graph/weight_position,
   /// ~graph/weight_normal, ~graph/radius [m]: neighbourhood graph of the `edges` field

@@ -19,8 +19,13 @@
 #include <opencv2/ximgproc.hpp>
 
 #include "bench_frame.h"
+#include "dasp/connectivity.h"
+#include "dasp/dalic.h"
 #include "dasp/dasp.h"
-#include "dasp/stages.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
+#include "dasp/superpoints.h"
 
 namespace {
 

@@ -19,6 +19,7 @@
 
 #include "bench_frame.h"
 #include "dasp/dasp.h"
+#include "dasp/sdasp.h"
 #include "dasp/segmentation.h"
 #include "dasp/spectral.h"
 #include "dasp/superpixel_graph.h"

@@ -30,8 +30,11 @@
 
 #include "bench_frame.h"
 #include "dasp/delta_density.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
+#include "dasp/sdasp.h"
 #include "dasp/segmentation.h"
-#include "dasp/stages.h"
 #include "dasp/tdasp.h"
 
 namespace {

@@ -30,14 +30,16 @@ if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
 endif()
 if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
   set_source_files_properties(${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
-    ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/src/features.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/density.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/connectivity.cpp
     ${CMAKE_CURRENT_SOURCE_DIR}/src/delta_density.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/sampling.cpp
     PROPERTIES COMPILE_OPTIONS "-fvect-cost-model=dynamic;-fassociative-math;-fno-signed-zeros")
-  # The DALIC and superpoint-fit kernels (simd.h, run_sums.h) pass GCC vector types between
-  # always-inlined helpers; GCC's note that such arguments have another ABI without AVX concerns
-  # calls across objects, which never happen here.
+  # The DALIC, superpoint-fit and connectivity kernels (simd.h, run_sums.h) pass GCC vector types
+  # between always-inlined helpers; GCC's note that such arguments have another ABI without AVX
+  # concerns calls across objects, which never happen here.
   set_property(SOURCE ${CMAKE_CURRENT_SOURCE_DIR}/src/dalic.cpp
-    ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp APPEND PROPERTY COMPILE_OPTIONS -Wno-psabi)
+    ${CMAKE_CURRENT_SOURCE_DIR}/src/superpoints.cpp ${CMAKE_CURRENT_SOURCE_DIR}/src/connectivity.cpp
+    APPEND PROPERTY COMPILE_OPTIONS -Wno-psabi)
 endif()
 # Benchmarks compare against OpenCV ximgproc SLIC in the same run.
 if(DASP_BUILD_BENCHMARKS)

@@ -1,6 +1,8 @@
 // Density-Adaptive Local Iterative Clustering (thesis §2.4, alg. 3) with the metrics of ASP
 // (def. 7) and DASP (eq. 3.19-3.21), plane-fit cluster normals (§3.2.3), purge of tiny clusters
 // and count control.
+#include "dasp/dalic.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -10,7 +12,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "dasp/stages.h"
+#include "dasp/density.h"
 #include "parallel.h"
 #include "run_sums.h"
 #include "simd.h"
@@ -851,6 +853,36 @@ void Dalic::Impl::splitHeaviest(Dalic& self, std::vector<Cluster>& next, int tar
     by_mass.push_back({child.mass, -static_cast<int>(next.size() - 1)});
     std::push_heap(by_mass.begin(), by_mass.end());
   }
+}
+
+DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
+                        int target_count) {
+  DalicParams params;
+  params.metric = metric;
+  params.weight_spatial = config.weight_spatial;
+  params.weight_color = config.weight_color;
+  params.weight_normal = config.weight_normal;
+  params.weight_depth = config.experimental.weight_depth;
+  params.window_multiple = config.window_multiple;
+  params.radius_m = radius_m;
+  params.depth_exponent =
+      metric == MetricKind::kDepthAdaptive ? config.experimental.depth_exponent : 2.0f;
+  params.min_size_fraction = config.min_size_fraction;
+  params.target_count = target_count;
+  params.threads = config.threads;
+  return params;
+}
+
+DalicParams dalicParams(const AspConfig& config) {
+  DalicParams params;
+  params.metric = MetricKind::kColor2D;
+  params.weight_spatial = config.weight_spatial;
+  params.weight_color = config.weight_color;
+  params.window_multiple = config.window_multiple;
+  params.min_size_fraction = config.min_size_fraction;
+  params.target_count = config.superpixel_count;
+  params.threads = config.threads;
+  return params;
 }
 
 }  // namespace dasp

@@ -8,35 +8,34 @@
 #include <stdexcept>
 #include <string>
 
-#include "dasp/stages.h"
+#include "dasp/connectivity.h"
+#include "dasp/dalic.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
+#include "dasp/superpoints.h"
 
 namespace dasp {
 namespace {
 
-struct RunParams {
-  SeedingMethod seeding;
-  std::uint64_t seed;
-  int iterations;
-  bool enforce_connectivity;
-  float min_size_fraction;
-  float depth_jump_ratio;       // > 0: connectivity on the surface (RGB-D methods), 0: in the image
-  float depth_exponent = 2.0f;  // DASP's density exponent: the superpixels' radius_m (fit)
-};
-
-// SPDS/grid/random seeds, DALIC iterations, connectivity and the superpoint fit.
-// `dalic` refers to `features` and `density` and has been reset to the run's parameters.
+// The steps after the density, with the sampling, iteration and connectivity settings of
+// `config` (DaspConfig or AspConfig): seeds, DALIC iterations, connectivity and the superpoint
+// fit (radius and depth exponent of the superpixels: dalic.params()). `dalic` refers to
+// `features` and `density` and has been reset to the run's parameters. depth_jump_ratio > 0:
+// connectivity on the surface (DASP), 0: in the image (the ASP baselines).
+template <class Config>
 Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& density,
-                    float radius_m, const RunParams& run) {
-  std::vector<Seed> seeds = sampleSeeds(density, run.seeding, run.seed);
+                    const Config& config, float depth_jump_ratio) {
+  std::vector<Seed> seeds = sampleSeeds(density, config.seeding, config.seed);
   if (seeds.empty()) {  // density too low for even one point: one superpixel at its maximum
     cv::Point max_location;
     cv::minMaxLoc(density, nullptr, nullptr, nullptr, &max_location);
     seeds.push_back({static_cast<float>(max_location.x), static_cast<float>(max_location.y)});
   }
   dalic.initialize(seeds);
-  for (int it = 0; it < run.iterations; ++it) {
+  for (int it = 0; it < config.iterations; ++it) {
     dalic.assign();
-    if (it + 1 < run.iterations) dalic.update();
+    if (it + 1 < config.iterations) dalic.update();
   }
   Superpixels result;
   result.labels = dalic.labels().clone();
@@ -45,14 +44,14 @@ Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& 
   // Without connectivity enforcement only empty labels are dropped, so that labels stay dense
   // indices into the superpixel vector. With it, a superpixel whose largest piece holds less
   // than min_size_fraction of one superpixel's density mass is purged (as during DALIC).
-  if (run.enforce_connectivity) {
+  if (config.enforce_connectivity) {
     cv::Mat depth;  // surface connectivity for the RGB-D methods (see enforceConnectivity)
-    if (features.hasDepth() && run.depth_jump_ratio > 0.0f) {
+    if (features.hasDepth() && depth_jump_ratio > 0.0f) {
       depth =
           cv::Mat(features.height, features.width, CV_32FC1, const_cast<float*>(features.z.data()));
     }
-    enforceConnectivity(result.labels, valid, density, run.min_size_fraction, depth,
-                        run.depth_jump_ratio);
+    enforceConnectivity(result.labels, valid, density, config.min_size_fraction, depth,
+                        depth_jump_ratio);
   } else {
     std::vector<int> renumber(dalic.clusters().size(), -1);
     int next = 0;
@@ -66,41 +65,13 @@ Superpixels cluster(Dalic& dalic, const PixelFeatures& features, const cv::Mat& 
       }
     }
   }
+  const DalicParams& params = dalic.params();
   result.superpixels =
-      fitSuperpoints(result.labels, features, density, radius_m, run.depth_exponent);
+      fitSuperpoints(result.labels, features, density, params.radius_m, params.depth_exponent);
   return result;
 }
 
-Superpixels cluster(const PixelFeatures& features, const cv::Mat& density,
-                    const DalicParams& dalic_params, const RunParams& run) {
-  Dalic dalic(features, density, dalic_params);
-  return cluster(dalic, features, density, dalic_params.radius_m, run);
-}
-
 }  // namespace
-
-float daspRadius(const PixelFeatures& features, const DaspConfig& config) {
-  return config.size_mode == SizeMode::kCount
-             ? radiusForCount(features, config.superpixel_count, config.depth_exponent)
-             : config.radius_m;
-}
-
-DalicParams dalicParams(const DaspConfig& config, MetricKind metric, float radius_m,
-                        int target_count) {
-  DalicParams params;
-  params.metric = metric;
-  params.weight_spatial = config.weight_spatial;
-  params.weight_color = config.weight_color;
-  params.weight_normal = config.weight_normal;
-  params.weight_depth = config.weight_depth;
-  params.window_multiple = config.window_multiple;
-  params.radius_m = radius_m;
-  params.depth_exponent = metric == MetricKind::kDepthAdaptive ? config.depth_exponent : 2.0f;
-  params.min_size_fraction = config.min_size_fraction;
-  params.target_count = target_count;
-  params.threads = config.threads;
-  return params;
-}
 
 struct DaspSegmenter::Buffers {
   PixelFeatures features;
@@ -117,7 +88,7 @@ Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   Buffers& b = *buffers_;
   computeFeatures(frame, config_, b.features);  // validates
   const float radius = daspRadius(b.features, config_);
-  computeDepthDensity(b.features, radius, b.density, config_.depth_exponent);
+  computeDepthDensity(b.features, radius, b.density, config_.experimental.depth_exponent);
   const DalicParams params =
       dalicParams(config_, MetricKind::kDepthAdaptive, radius,
                   config_.size_mode == SizeMode::kCount ? config_.superpixel_count : 0);
@@ -126,9 +97,7 @@ Superpixels DaspSegmenter::compute(const RgbdFrame& frame) {
   } else {
     b.dalic.emplace(b.features, b.density, params);
   }
-  return cluster(*b.dalic, b.features, b.density, radius,
-                 {config_.seeding, config_.seed, config_.iterations, config_.enforce_connectivity,
-                  config_.min_size_fraction, config_.depth_jump_ratio, config_.depth_exponent});
+  return cluster(*b.dalic, b.features, b.density, config_, config_.depth_jump_ratio);
 }
 
 Superpixels computeDasp(const RgbdFrame& frame, const DaspConfig& config) {
@@ -176,17 +145,8 @@ Superpixels computeAspRgb(const cv::Mat& color, const AspConfig& config) {
     density = config.density * (config.superpixel_count / integral);  // eq. 3.17
     if (!density.isContinuous()) density = density.clone();
   }
-  DalicParams params;
-  params.metric = MetricKind::kColor2D;
-  params.weight_spatial = config.weight_spatial;
-  params.weight_color = config.weight_color;
-  params.window_multiple = config.window_multiple;
-  params.min_size_fraction = config.min_size_fraction;
-  params.target_count = config.superpixel_count;
-  params.threads = config.threads;
-  return cluster(features, density, params,
-                 {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
-                  config.min_size_fraction, 0.0f});
+  Dalic dalic(features, density, dalicParams(config));
+  return cluster(dalic, features, density, config, 0.0f);
 }
 
 Superpixels computeAspRgbd(const RgbdFrame& frame, const DaspConfig& config) {
@@ -195,11 +155,9 @@ Superpixels computeAspRgbd(const RgbdFrame& frame, const DaspConfig& config) {
   const PixelFeatures features = computeFeatures(frame, count_config);  // validates
   const float radius = radiusForCount(features, config.superpixel_count);
   const cv::Mat density = computeConstantDensity(features, config.superpixel_count);
-  const DalicParams params =
-      dalicParams(config, MetricKind::kColorDepth2D, radius, config.superpixel_count);
-  return cluster(features, density, params,
-                 {config.seeding, config.seed, config.iterations, config.enforce_connectivity,
-                  config.min_size_fraction, 0.0f});
+  Dalic dalic(features, density,
+              dalicParams(config, MetricKind::kColorDepth2D, radius, config.superpixel_count));
+  return cluster(dalic, features, density, config, 0.0f);
 }
 
 }  // namespace dasp

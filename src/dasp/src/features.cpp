@@ -1,4 +1,6 @@
-// Input checks, per-pixel features (thesis §3.2.1) and densities (§3.2.2).
+// Input checks and per-pixel features (thesis §3.2.1).
+#include "dasp/features.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -6,27 +8,16 @@
 #include <stdexcept>
 #include <string>
 
-#include "dasp/stages.h"
+#include "depth_exponent.h"
 #include "parallel.h"
 #include "simd.h"
 
 namespace dasp {
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 constexpr int kFeatureChunks = 16;  // row stripes of the per-pixel passes
 
 bool finitePositive(float value) { return std::isfinite(value) && value > 0.0f; }
-
-// The density's depth exponent a as the number k = 2 (2 - a) of factors 1 / sqrt(z) in z^(a - 2)
-// (validated: a in [0, 2] and a multiple of 0.5, so that no per-pixel pow is needed).
-int inverseRootFactors(float depth_exponent) {
-  const float k = 2.0f * (2.0f - depth_exponent);
-  if (!(k >= 0.0f && k <= 4.0f) || k != std::round(k)) {
-    throw std::invalid_argument("DASP: depth_exponent must be one of 0, 0.5, 1, 1.5, 2");
-  }
-  return static_cast<int>(k);
-}
 
 void requireColor(const cv::Mat& color, const char* what) {
   if (color.empty()) throw std::invalid_argument(std::string(what) + ": colour image is empty");
@@ -79,8 +70,8 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config) {
     throw std::invalid_argument("DASP: radius_m must be finite and positive in radius mode");
   }
   if (config.iterations < 1) throw std::invalid_argument("DASP: iterations must be >= 1");
-  for (const float weight :
-       {config.weight_spatial, config.weight_color, config.weight_normal, config.weight_depth}) {
+  for (const float weight : {config.weight_spatial, config.weight_color, config.weight_normal,
+                             config.experimental.weight_depth}) {
     if (!(weight >= 0.0f) || !std::isfinite(weight)) {
       throw std::invalid_argument("DASP: metric weights must be finite and >= 0");
     }
@@ -91,11 +82,12 @@ void validateInput(const RgbdFrame& frame, const DaspConfig& config) {
   if (!(config.min_size_fraction >= 0.0f) || !(config.min_size_fraction < 1.0f)) {
     throw std::invalid_argument("DASP: min_size_fraction must be in [0, 1)");
   }
-  if (!(config.max_slant_factor >= 1.0f) || !std::isfinite(config.max_slant_factor)) {
+  const float max_slant_factor = config.experimental.max_slant_factor;
+  if (!(max_slant_factor >= 1.0f) || !std::isfinite(max_slant_factor)) {
     throw std::invalid_argument("DASP: max_slant_factor must be finite and >= 1");
   }
   if (config.normal_step_px < 1) throw std::invalid_argument("DASP: normal_step_px must be >= 1");
-  inverseRootFactors(config.depth_exponent);  // throws with the reason
+  detail::inverseRootFactors(config.experimental.depth_exponent);  // throws with the reason
   if (!finitePositive(config.depth_jump_ratio)) {
     throw std::invalid_argument("DASP: depth_jump_ratio must be finite and positive");
   }
@@ -295,7 +287,7 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
   // the image border, neighbours outside the image count as invalid (scalar path).
   const int step = config.normal_step_px;
   const float jump = config.depth_jump_ratio;
-  const NormalParams params{inv_fx, inv_fy, k.cx, config.max_slant_factor};
+  const NormalParams params{inv_fx, inv_fy, k.cx, config.experimental.max_slant_factor};
   const float* z_all = features.z.data();
   const auto depth_at = [&](int col, int row) {
     return col >= 0 && col < width && row >= 0 && row < height
@@ -333,94 +325,6 @@ void computeFeatures(const RgbdFrame& frame, const DaspConfig& config, PixelFeat
       }
     }
   });
-}
-
-namespace {
-
-// (z / 1 m)^(a - 2) for k = 2 (2 - a) >= 1 factors of 1 / sqrt(z); 0 where z <= 0 (invalid
-// depth). The callers skip it for k = 0 (a = 2), where the weight is 1.
-inline float depthWeight(float z, int k) {
-  const float s = z > 0.0f ? 1.0f / std::sqrt(z) : 0.0f;
-  float w = s;
-  for (int i = 1; i < k; ++i) w *= s;
-  return w;
-}
-
-}  // namespace
-
-float radiusAtDepth(float radius_m, float depth_m, float depth_exponent) {
-  const int k = inverseRootFactors(depth_exponent);
-  if (k == 0 || !(depth_m > 0.0f)) return radius_m;
-  const float q = std::sqrt(std::sqrt(depth_m));  // z^(1/4): R z^((2 - a) / 2) = R q^k
-  float r = radius_m;
-  for (int i = 0; i < k; ++i) r *= q;
-  return r;
-}
-
-float radiusForCount(const PixelFeatures& features, int count, float depth_exponent) {
-  if (!features.hasDepth()) throw std::invalid_argument("radiusForCount: features have no depth");
-  if (count < 1) throw std::invalid_argument("radiusForCount: count must be >= 1");
-  const int k = inverseRootFactors(depth_exponent);
-  double total_area = 0.0;
-  if (k == 0) {
-    for (float a : features.area) total_area += a;
-  } else {
-    for (std::size_t i = 0; i < features.size(); ++i) {
-      total_area += features.area[i] * depthWeight(features.z[i], k);
-    }
-  }
-  if (!(total_area > 0.0)) throw std::invalid_argument("radiusForCount: no valid surface area");
-  return static_cast<float>(std::sqrt(total_area / (kPi * count)));
-}
-
-cv::Mat computeDepthDensity(const PixelFeatures& features, float radius_m, float depth_exponent) {
-  cv::Mat density;
-  computeDepthDensity(features, radius_m, density, depth_exponent);
-  return density;
-}
-
-void computeDepthDensity(const PixelFeatures& features, float radius_m, cv::Mat& density,
-                         float depth_exponent) {
-  if (!features.hasDepth()) {
-    throw std::invalid_argument("computeDepthDensity: features have no depth");
-  }
-  if (!finitePositive(radius_m)) {
-    throw std::invalid_argument("computeDepthDensity: radius must be finite and positive");
-  }
-  const int k = inverseRootFactors(depth_exponent);
-  density.create(features.height, features.width, CV_32FC1);
-  const float scale = 1.0f / (kPi * radius_m * radius_m);
-  float* out = density.ptr<float>();
-  if (k == 0) {
-    for (std::size_t i = 0; i < features.size(); ++i) out[i] = features.area[i] * scale;
-  } else {
-    for (std::size_t i = 0; i < features.size(); ++i) {
-      out[i] = features.area[i] * scale * depthWeight(features.z[i], k);
-    }
-  }
-}
-
-cv::Mat computeConstantDensity(const PixelFeatures& features, int count) {
-  if (count < 1 || count > features.valid_count) {
-    throw std::invalid_argument("computeConstantDensity: count must be in [1, valid pixels]");
-  }
-  cv::Mat density(features.height, features.width, CV_32FC1);
-  const float value = static_cast<float>(count) / static_cast<float>(features.valid_count);
-  float* out = density.ptr<float>();
-  for (std::size_t i = 0; i < features.size(); ++i) out[i] = features.valid[i] ? value : 0.0f;
-  return density;
-}
-
-double densityIntegral(const cv::Mat& density) {
-  if (density.type() != CV_32FC1) throw std::invalid_argument("density must be CV_32FC1");
-  double sum = 0.0;
-  for (int row = 0; row < density.rows; ++row) {
-    const float* p = density.ptr<float>(row);
-    double row_sum = 0.0;
-    for (int col = 0; col < density.cols; ++col) row_sum += p[col];
-    sum += row_sum;
-  }
-  return sum;
 }
 
 }  // namespace dasp

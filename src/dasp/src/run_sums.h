@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "dasp/stages.h"
+#include "dasp/features.h"
 #include "point_moments.h"
 #include "simd.h"
 

@@ -1,12 +1,12 @@
 // Seed sampling (thesis §2.3): density pyramid, SPDS alg. 1 and alg. 2, white noise, grid.
+#include "dasp/sampling.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <stdexcept>
-
-#include "dasp/stages.h"
 
 namespace dasp {
 namespace {

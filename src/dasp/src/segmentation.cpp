@@ -1,3 +1,4 @@
+// Threshold segmentation of a boundary-weighted graph, merge levels and the pixel UCM.
 #include "dasp/segmentation.h"
 
 #include <opencv2/imgproc.hpp>
@@ -219,98 +220,6 @@ cv::Mat ultrametricContourMap(const cv::Mat& superpixel_labels, const WeightedGr
   return ucm;
 }
 
-double BoundaryCounts::precision() const {
-  return partition_pixels == 0 ? 1.0 : static_cast<double>(precise_pixels) / partition_pixels;
-}
-double BoundaryCounts::recall() const {
-  return reference_pixels == 0 ? 1.0 : static_cast<double>(recalled_pixels) / reference_pixels;
-}
-double BoundaryCounts::f1() const {
-  const double p = precision();
-  const double r = recall();
-  return p + r > 0.0 ? 2.0 * p * r / (p + r) : 0.0;
-}
-BoundaryCounts& BoundaryCounts::operator+=(const BoundaryCounts& other) {
-  partition_pixels += other.partition_pixels;
-  precise_pixels += other.precise_pixels;
-  reference_pixels += other.reference_pixels;
-  recalled_pixels += other.recalled_pixels;
-  return *this;
-}
-
-std::vector<BoundaryCounts> boundaryCurve(const cv::Mat& ucm, const cv::Mat& ground_truth,
-                                          const cv::Mat& mask, const std::vector<float>& thresholds,
-                                          int tolerance_px) {
-  const char* what = "boundaryCurve";
-  if (ucm.type() != CV_32FC1) throw std::invalid_argument("boundaryCurve: ucm must be CV_32FC1");
-  checkMask(mask, ucm.size(), what);
-  if (ground_truth.size() != ucm.size() || ground_truth.channels() != 1) {
-    throw std::invalid_argument("boundaryCurve: ground truth must be one channel of the ucm size");
-  }
-  if (tolerance_px < 0) throw std::invalid_argument("boundaryCurve: tolerance_px must be >= 0");
-  cv::Mat reference;
-  ground_truth.convertTo(reference, CV_32S);
-  const cv::Mat reference_boundary = metrics::boundaryMap(reference, mask);
-  cv::Mat reference_near, ucm_near;  // fresh buffers: dilate must not write into its input
-  if (tolerance_px == 0) {
-    reference_near = reference_boundary;
-    ucm_near = ucm;
-  } else {
-    // Same square window as metrics::boundaryScores; on the ucm the dilation is a max filter, so
-    // ucm_near >= t exactly where a boundary pixel of the segmentation at t is within reach.
-    const cv::Mat kernel = cv::getStructuringElement(
-        cv::MORPH_RECT, cv::Size(2 * tolerance_px + 1, 2 * tolerance_px + 1));
-    cv::dilate(reference_boundary, reference_near, kernel);
-    cv::dilate(ucm, ucm_near, kernel);
-  }
-  // Sorted level values: partition pixels, precise ones, and the best level near each reference
-  // boundary pixel; the counts at t are then the numbers of values >= t.
-  std::vector<float> partition, precise, recalled;
-  std::size_t reference_pixels = 0;
-  for (int y = 0; y < ucm.rows; ++y) {
-    const float* level = ucm.ptr<float>(y);
-    const float* level_near = ucm_near.ptr<float>(y);
-    const std::uint8_t* ref = reference_boundary.ptr<std::uint8_t>(y);
-    const std::uint8_t* ref_near = reference_near.ptr<std::uint8_t>(y);
-    for (int x = 0; x < ucm.cols; ++x) {
-      if (level[x] >= 0.0f) {
-        partition.push_back(level[x]);
-        if (ref_near[x] != 0) precise.push_back(level[x]);
-      }
-      if (ref[x] != 0) {
-        ++reference_pixels;
-        if (level_near[x] >= 0.0f) recalled.push_back(level_near[x]);
-      }
-    }
-  }
-  std::sort(partition.begin(), partition.end());
-  std::sort(precise.begin(), precise.end());
-  std::sort(recalled.begin(), recalled.end());
-  auto at_least = [](const std::vector<float>& values, float t) {
-    return static_cast<std::size_t>(values.end() -
-                                    std::lower_bound(values.begin(), values.end(), t));
-  };
-  std::vector<BoundaryCounts> curve(thresholds.size());
-  for (std::size_t i = 0; i < thresholds.size(); ++i) {
-    // Levels are >= 0, so every t <= 0 gives the full superpixel boundary.
-    const float t = std::max(thresholds[i], 0.0f);
-    BoundaryCounts& c = curve[i];
-    c.threshold = thresholds[i];
-    c.partition_pixels = at_least(partition, t);
-    c.precise_pixels = at_least(precise, t);
-    c.reference_pixels = reference_pixels;
-    c.recalled_pixels = at_least(recalled, t);
-  }
-  return curve;
-}
-
-WeightedGraph ultrametricContourGraph(const Superpixels& superpixels, const SdaspConfig& config) {
-  WeightedGraph ucg = buildSuperpixelGraph(superpixels, config.graph);
-  const std::vector<float> global = globalizeEdgeWeights(ucg, config.spectral);
-  for (std::size_t k = 0; k < ucg.edges.size(); ++k) ucg.edges[k].weight = global[k];
-  return ucg;
-}
-
 std::vector<float> spanningMergeLevels(const WeightedGraph& graph) {
   checkGraph(graph, "spanningMergeLevels");
   std::vector<float> levels;
@@ -320,38 +229,6 @@ std::vector<float> spanningMergeLevels(const WeightedGraph& graph) {
     if (sets.unite(graph.edges[k].a, graph.edges[k].b)) levels.push_back(graph.edges[k].weight);
   }
   return levels;  // ascending: Kruskal takes the edges in weight order
-}
-
-float adaptiveCutThreshold(const WeightedGraph& ucg, float scale, float quantile,
-                           float max_threshold) {
-  if (!(scale > 0.0f) || !std::isfinite(scale)) {
-    throw std::invalid_argument("adaptiveCutThreshold: scale must be a positive number");
-  }
-  if (!(quantile >= 0.0f && quantile <= 1.0f)) {
-    throw std::invalid_argument("adaptiveCutThreshold: quantile must lie in [0, 1]");
-  }
-  if (!(max_threshold > 0.0f)) {
-    throw std::invalid_argument("adaptiveCutThreshold: max_threshold must be positive");
-  }
-  const std::vector<float> levels = spanningMergeLevels(ucg);
-  if (levels.empty()) return max_threshold;
-  const double position = static_cast<double>(quantile) * static_cast<double>(levels.size() - 1);
-  const std::size_t below = static_cast<std::size_t>(position);
-  const std::size_t above = std::min(below + 1, levels.size() - 1);
-  const double fraction = position - static_cast<double>(below);
-  const double q = (1.0 - fraction) * levels[below] + fraction * levels[above];
-  return static_cast<float>(std::min<double>(max_threshold, scale * q));
-}
-
-float cutThreshold(const WeightedGraph& ucg, const SdaspConfig& config) {
-  if (config.cut == CutRule::kAdaptive) {
-    return adaptiveCutThreshold(ucg, config.adaptive_scale, config.adaptive_quantile,
-                                config.adaptive_max_threshold);
-  }
-  if (!std::isfinite(config.threshold)) {
-    throw std::invalid_argument("cutThreshold: threshold must be finite");
-  }
-  return config.threshold;
 }
 
 }  // namespace dasp

@@ -4,7 +4,12 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "dasp/stages.h"
+#include "dasp/connectivity.h"
+#include "dasp/dalic.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
+#include "dasp/superpoints.h"
 
 namespace dasp {
 namespace {
@@ -149,7 +154,7 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
   const DaspConfig& dc = config_.dasp;
   const PixelFeatures features = computeFeatures(frame, dc);  // validates
   const float radius = daspRadius(features, dc);
-  const cv::Mat density = computeDepthDensity(features, radius, dc.depth_exponent);
+  const cv::Mat density = computeDepthDensity(features, radius, dc.experimental.depth_exponent);
   const std::uint64_t frame_seed = mixSeed(dc.seed, static_cast<std::uint64_t>(frame_index_));
 
   StreamingDaspFrame out;
@@ -175,7 +180,7 @@ StreamingDaspFrame StreamingDasp::process(const RgbdFrame& frame) {
 
   out.superpixels.labels = labels;
   out.superpixels.superpixels =
-      fitSuperpoints(labels, features, density, radius, dc.depth_exponent);
+      fitSuperpoints(labels, features, density, radius, dc.experimental.depth_exponent);
   const std::size_t n = out.superpixels.superpixels.size();
   out.predecessor.assign(n, -1);
   out.track_id.assign(n, -1);

@@ -11,7 +11,10 @@
 
 #include <opencv2/core.hpp>
 
-#include "dasp/stages.h"
+#include "dasp/dalic.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
 #include "dasp_synthetic.h"
 #include "simd.h"
 
@@ -26,7 +29,7 @@ float fullDistance(const PixelFeatures& f, const DalicParams& p, const Cluster& 
   if (p.metric == MetricKind::kDepthAdaptive) {
     const Eigen::Vector3f point(f.x[i], f.y[i], f.z[i]);
     const Eigen::Vector3f normal(f.nx[i], f.ny[i], f.nz[i]);
-    // Each cluster's own radius (DaspConfig::depth_exponent; radius_m for the thesis' 2).
+    // Each cluster's own radius (DaspExperimental::depth_exponent; radius_m for the thesis' 2).
     const float radius = radiusAtDepth(p.radius_m, c.position.z(), p.depth_exponent);
     d += p.weight_spatial / (radius * radius) * (point - c.position).squaredNorm() +
          p.weight_normal * (1.0f - normal.dot(c.normal));

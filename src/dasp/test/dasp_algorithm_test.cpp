@@ -12,9 +12,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dasp/connectivity.h"
 #include "dasp/dasp.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
 #include "dasp/metrics.h"
-#include "dasp/stages.h"
 #include "dasp_synthetic.h"
 
 namespace dasp {
@@ -113,7 +115,7 @@ TEST(DaspDensity, DaspRadiusFollowsTheSizeModeAndExponent) {
   const PixelFeatures f = computeFeatures(frame);
   DaspConfig config;
   config.superpixel_count = 37;
-  config.depth_exponent = 1.0f;
+  config.experimental.depth_exponent = 1.0f;
   EXPECT_FLOAT_EQ(daspRadius(f, config), radiusForCount(f, 37, 1.0f));
   EXPECT_NE(daspRadius(f, config), radiusForCount(f, 37));  // the exponent is passed on
   config.size_mode = SizeMode::kRadius;
@@ -150,7 +152,7 @@ TEST(DaspDensity, DepthExponentSetsHowDensityGrowsWithDepth) {
     EXPECT_THROW(computeDepthDensity(f, 0.05f, bad), std::invalid_argument) << bad;
     EXPECT_THROW(radiusForCount(f, 10, bad), std::invalid_argument) << bad;
     DaspConfig config;
-    config.depth_exponent = bad;
+    config.experimental.depth_exponent = bad;
     EXPECT_THROW(computeDasp(frame, config), std::invalid_argument) << bad;
   }
 }
@@ -163,7 +165,7 @@ TEST(Dasp, DepthExponentOneGivesFarSurfacesLargerSuperpixels) {
   for (const float exponent : {2.0f, 1.0f}) {
     DaspConfig config;
     config.superpixel_count = 150;
-    config.depth_exponent = exponent;
+    config.experimental.depth_exponent = exponent;
     const Superpixels s = computeDasp(frame, config);
     double near_pixels = 0.0, far_pixels = 0.0, near_radius = 0.0, far_radius = 0.0;
     int near_count = 0, far_count = 0;
@@ -278,7 +280,7 @@ TEST(Dasp, DepthWeightStretchesSuperpixelsAlongEqualDepth) {
   DaspConfig config;
   config.superpixel_count = 150;
   const Superpixels isotropic = computeDasp(frame, config);
-  config.weight_depth = 4.0f;
+  config.experimental.weight_depth = 4.0f;
   const Superpixels weighted = computeDasp(frame, config);
   EXPECT_NEAR(static_cast<double>(weighted.superpixels.size()), 150.0, 3.0);
   // Pixel-weighted ratio of the superpixels' spread along x (the depth gradient) to along y.

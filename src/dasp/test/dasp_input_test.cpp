@@ -5,8 +5,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "dasp/dalic.h"
 #include "dasp/dasp.h"
-#include "dasp/stages.h"
+#include "dasp/features.h"
+#include "dasp/sampling.h"
 #include "dasp_synthetic.h"
 
 namespace dasp {
@@ -17,6 +19,14 @@ template <typename Config, typename Member, typename Value>
 Config with(Member Config::*member, Value value) {
   Config config;
   config.*member = static_cast<Member>(value);
+  return config;
+}
+
+// A default DASP config with one experimental knob changed.
+template <typename Member, typename Value>
+DaspConfig withExperimental(Member DaspExperimental::*member, Value value) {
+  DaspConfig config;
+  config.experimental.*member = static_cast<Member>(value);
   return config;
 }
 
@@ -109,11 +119,13 @@ TEST(DaspInput, NonsensicalParameters) {
   const RgbdFrame frame = goodFrame();
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::iterations, 0)); }, "iterations");
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::weight_color, -1.0f)); }, "weights");
-  expectInvalid([&] { computeDasp(frame, with(&DaspConfig::weight_depth, -0.5f)); }, "weights");
+  expectInvalid(
+      [&] { computeDasp(frame, withExperimental(&DaspExperimental::weight_depth, -0.5f)); },
+      "weights");
   expectInvalid(
       [&] {
-        computeDasp(frame,
-                    with(&DaspConfig::weight_depth, std::numeric_limits<float>::quiet_NaN()));
+        computeDasp(frame, withExperimental(&DaspExperimental::weight_depth,
+                                            std::numeric_limits<float>::quiet_NaN()));
       },
       "weights");
   expectInvalid([&] { computeDasp(frame, with(&DaspConfig::window_multiple, 0.0f)); }, "window");

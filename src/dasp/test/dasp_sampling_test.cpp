@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "dasp/stages.h"
+#include "dasp/density.h"
+#include "dasp/sampling.h"
 
 namespace dasp {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "dasp/connectivity.h"
 #include "dasp/dasp.h"
-#include "dasp/stages.h"
 #include "dasp_synthetic.h"
 
 namespace dasp {

@@ -10,6 +10,7 @@
 
 #include "dasp/dasp.h"
 #include "dasp/metrics.h"
+#include "dasp/sdasp.h"
 #include "dasp/segmentation.h"
 #include "dasp/spectral.h"
 #include "dasp/superpixel_graph.h"
@@ -254,8 +255,8 @@ TEST(Segmentation, CurveEqualsBoundaryScoresPerThreshold) {
   const cv::Mat ucm = ultrametricContourMap(s.labels, s.ucg, s.mask);
   const std::vector<float> thresholds = {-1.0f, 0.0f, 0.3f, 0.5f, 0.7f, 0.9f, 2.0f};
   for (int tolerance : {0, 2}) {
-    const std::vector<BoundaryCounts> curve =
-        boundaryCurve(ucm, s.truth, s.mask, thresholds, tolerance);
+    const std::vector<metrics::BoundaryCounts> curve =
+        metrics::boundaryCurve(ucm, s.truth, s.mask, thresholds, tolerance);
     ASSERT_EQ(curve.size(), thresholds.size());
     for (std::size_t i = 0; i < thresholds.size(); ++i) {
       const cv::Mat segments = segmentPixels(s.labels, segmentGraph(s.ucg, thresholds[i]));

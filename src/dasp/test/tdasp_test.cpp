@@ -11,7 +11,7 @@
 #include "dasp/delta_density.h"
 #include "dasp/hysteresis_segmentation.h"
 #include "dasp/metrics.h"
-#include "dasp/stages.h"
+#include "dasp/sampling.h"
 #include "dasp/strands.h"
 #include "dasp/streaming_dasp.h"
 #include "dasp/tdasp.h"

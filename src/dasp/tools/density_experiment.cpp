@@ -19,8 +19,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "dasp/dalic.h"
+#include "dasp/features.h"
 #include "dasp/metrics.h"
-#include "dasp/stages.h"
+#include "dasp/sampling.h"
 
 namespace {
 

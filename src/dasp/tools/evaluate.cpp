@@ -19,8 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "dasp/features.h"
 #include "dasp/rgbd_io.h"
-#include "dasp/stages.h"
 #include "peers/method_options_cli.h"
 #include "peers/methods.h"
 
@@ -273,10 +273,10 @@ int main(int argc, char** argv) {
                               {"frames", frames.size()},
                               {"iterations", options.iterations},
                               {"seed", options.seed},
-                              {"dasp_weight_depth", options.weight_depth},
+                              {"dasp_weight_depth", options.experimental.weight_depth},
                               {"depth_jump_ratio", options.depth_jump_ratio},
-                              {"max_slant_factor", options.max_slant_factor},
-                              {"depth_exponent", options.depth_exponent},
+                              {"max_slant_factor", options.experimental.max_slant_factor},
+                              {"depth_exponent", options.experimental.depth_exponent},
                               {"parallel_frames", threads},
                               {"mask", "object label > 0 and depth > 0"},
                               {"time_ms", "thread CPU time of the method call (single-threaded)"},

@@ -28,6 +28,7 @@
 #include "dasp/dasp.h"
 #include "dasp/metrics.h"
 #include "dasp/rgbd_io.h"
+#include "dasp/sdasp.h"
 #include "dasp/segmentation.h"
 #include "dasp/spectral.h"
 #include "dasp/superpixel_graph.h"
@@ -132,12 +133,12 @@ cv::Mat evaluationMask(const dasp::RgbdFrame& frame, const cv::Mat& truth) {
 
 struct Curve {
   std::vector<float> thresholds;
-  std::vector<dasp::BoundaryCounts> total;  // summed over frames (ODS)
-  dasp::BoundaryCounts ois_total;           // counts at every frame's own best threshold
-  double mean_best_f1 = 0.0;                // mean over frames of the best F1 of the frame
+  std::vector<dasp::metrics::BoundaryCounts> total;  // summed over frames (ODS)
+  dasp::metrics::BoundaryCounts ois_total;           // counts at every frame's own best threshold
+  double mean_best_f1 = 0.0;                         // mean over frames of the best F1 of the frame
   int frames = 0;
 
-  void add(const std::vector<dasp::BoundaryCounts>& frame_curve) {
+  void add(const std::vector<dasp::metrics::BoundaryCounts>& frame_curve) {
     if (total.empty()) total.resize(frame_curve.size());
     std::size_t best = 0;
     for (std::size_t i = 0; i < frame_curve.size(); ++i) {
@@ -157,7 +158,7 @@ struct Curve {
   }
 };
 
-nlohmann::json countsJson(const dasp::BoundaryCounts& c) {
+nlohmann::json countsJson(const dasp::metrics::BoundaryCounts& c) {
   return {c.partition_pixels, c.precise_pixels, c.reference_pixels, c.recalled_pixels};
 }
 
@@ -169,7 +170,7 @@ nlohmann::ordered_json curveJson(const Curve& curve, const std::vector<Times>& t
                                  const std::vector<double>& frame_best_f1) {
   nlohmann::ordered_json j;
   const std::size_t ods = curve.odsIndex();
-  const dasp::BoundaryCounts& o = curve.total[ods];
+  const dasp::metrics::BoundaryCounts& o = curve.total[ods];
   j["ods"] = {{"threshold", curve.thresholds[ods]},
               {"precision", o.precision()},
               {"recall", o.recall()},
@@ -477,7 +478,7 @@ nlohmann::ordered_json evaluateLccp(const std::vector<dasp::RgbdFramePaths>& fra
   dasp::peers::LccpConfig lccp;
   lccp.seed_resolution_m = seed_resolution;
   lccp.single_camera_transform = o.lccp_single_camera;
-  dasp::BoundaryCounts total;
+  dasp::metrics::BoundaryCounts total;
   std::vector<Times> times;
   std::vector<double> frame_f1;
   nlohmann::json lccp_counts = nlohmann::json::array();
@@ -497,7 +498,8 @@ nlohmann::ordered_json evaluateLccp(const std::vector<dasp::RgbdFramePaths>& fra
     dasp::WeightedGraph none;  // labels are compact: 0..n-1
     none.node_count = static_cast<int>(dasp::metrics::countSegments(labels, cv::Mat()));
     const cv::Mat ucm = dasp::ultrametricContourMap(labels, none, mask);
-    const dasp::BoundaryCounts c = dasp::boundaryCurve(ucm, truth, mask, {0.0f}).front();
+    const dasp::metrics::BoundaryCounts c =
+        dasp::metrics::boundaryCurve(ucm, truth, mask, {0.0f}).front();
     total += c;
     frame_f1.push_back(c.f1());
     lccp_counts.push_back(countsJson(c));
@@ -531,7 +533,7 @@ struct SettingScores {
   nlohmann::json curve_counts = nlohmann::json::array();
   nlohmann::json adaptive_counts = nlohmann::json::array();
   nlohmann::json adaptive_thresholds = nlohmann::json::array();
-  std::vector<dasp::BoundaryCounts> adaptive_total;
+  std::vector<dasp::metrics::BoundaryCounts> adaptive_total;
 };
 
 // One frame's superpixels under one setting: graph, eigenvectors, cut and UCM (timed), its
@@ -557,16 +559,16 @@ void scoreFrame(const dasp::Superpixels& sp, double t_superpixels, const cv::Mat
   t0 = threadCpuMilliseconds();
   const cv::Mat ucm = dasp::ultrametricContourMap(sp.labels, ucg, mask);
   t.ucm = threadCpuMilliseconds() - t0;
-  const std::vector<dasp::BoundaryCounts> frame_curve =
-      dasp::boundaryCurve(ucm, truth, mask, thresholds);
+  const std::vector<dasp::metrics::BoundaryCounts> frame_curve =
+      dasp::metrics::boundaryCurve(ucm, truth, mask, thresholds);
   scores.curve.thresholds = thresholds;
   scores.curve.add(frame_curve);
   std::vector<float> frame_cuts;
   for (const AdaptiveSetting& a : adaptive) {
     frame_cuts.push_back(dasp::adaptiveCutThreshold(ucg, a.scale, a.quantile, a.cap));
   }
-  const std::vector<dasp::BoundaryCounts> cut_counts =
-      dasp::boundaryCurve(ucm, truth, mask, frame_cuts);
+  const std::vector<dasp::metrics::BoundaryCounts> cut_counts =
+      dasp::metrics::boundaryCurve(ucm, truth, mask, frame_cuts);
   nlohmann::json frame_adaptive = nlohmann::json::array();
   scores.adaptive_total.resize(adaptive.size());
   for (std::size_t a = 0; a < adaptive.size(); ++a) {
@@ -575,7 +577,8 @@ void scoreFrame(const dasp::Superpixels& sp, double t_superpixels, const cv::Mat
   }
   if (per_frame) {
     nlohmann::json frame_points = nlohmann::json::array();
-    for (const dasp::BoundaryCounts& c : frame_curve) frame_points.push_back(countsJson(c));
+    for (const dasp::metrics::BoundaryCounts& c : frame_curve)
+      frame_points.push_back(countsJson(c));
     scores.curve_counts.push_back(frame_points);
     scores.adaptive_counts.push_back(frame_adaptive);
     scores.adaptive_thresholds.push_back(frame_cuts);
@@ -605,7 +608,7 @@ nlohmann::ordered_json settingResult(const std::string& method, const std::strin
   nlohmann::ordered_json cuts = nlohmann::ordered_json::array();
   std::size_t best_adaptive = 0;
   for (std::size_t a = 0; a < adaptive.size(); ++a) {
-    const dasp::BoundaryCounts& counts = s.adaptive_total[a];
+    const dasp::metrics::BoundaryCounts& counts = s.adaptive_total[a];
     cuts.push_back({{"scale", adaptive[a].scale},
                     {"quantile", adaptive[a].quantile},
                     {"max_threshold", adaptive[a].cap},

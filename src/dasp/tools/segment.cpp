@@ -13,9 +13,9 @@
 #include <string>
 
 #include "dasp/dasp.h"
+#include "dasp/features.h"
 #include "dasp/metrics.h"
 #include "dasp/rgbd_io.h"
-#include "dasp/stages.h"
 #include "peers/method_options_cli.h"
 #include "peers/methods.h"
 

@@ -30,11 +30,14 @@
 #include <vector>
 
 #include "dasp/delta_density.h"
+#include "dasp/density.h"
+#include "dasp/features.h"
 #include "dasp/metrics.h"
 #include "dasp/rgbd_io.h"
+#include "dasp/sampling.h"
+#include "dasp/sdasp.h"
 #include "dasp/segmentation.h"
 #include "dasp/spectral.h"
-#include "dasp/stages.h"
 #include "dasp/superpixel_graph.h"
 #include "dasp/tdasp.h"
 #include "dasp/temporal_metrics.h"
@@ -98,7 +101,7 @@ cv::Mat colourise(const cv::Mat& labels) {
 nlohmann::json ddsChurn(const dasp::RgbdFrame& frame, const dasp::DaspConfig& dasp_config) {
   const dasp::PixelFeatures features = dasp::computeFeatures(frame, dasp_config);
   const cv::Mat density = dasp::computeDepthDensity(
-      features, dasp::daspRadius(features, dasp_config), dasp_config.depth_exponent);
+      features, dasp::daspRadius(features, dasp_config), dasp_config.experimental.depth_exponent);
   nlohmann::json out = nlohmann::json::object();
   for (const float smoothing : {0.0f, 0.5f, 1.0f, 2.0f, 3.0f}) {
     double churn = 0.0;

@@ -1,9 +1,10 @@
 // Adaptive Superpixels (ASP, thesis ch. 2) and Depth-Adaptive Superpixels (DASP, thesis ch. 3).
 // Entry points: computeDasp (RGB-D, metric d_DA), computeAspRgb (SLIC-like colour-only baseline)
-// and computeAspRgbd (naive RGB-D baseline, ch. 3.3); the stages are in dasp/stages.h. Pixel
-// (u, v) = (column, row), pixel centres at integer coordinates (eq. 3.4); 3D in metres in the
-// camera optical frame; labels CV_32SC1, -1 = unlabelled. Invalid input throws
-// std::invalid_argument. Details: docs/dasp_core.md#conventions
+// and computeAspRgbd (naive RGB-D baseline, ch. 3.3); the stages are in features.h, density.h,
+// sampling.h, dalic.h, connectivity.h and superpoints.h. Pixel (u, v) = (column, row), pixel
+// centres at integer coordinates (eq. 3.4); 3D in metres in the camera optical frame; labels
+// CV_32SC1, -1 = unlabelled. Invalid input throws std::invalid_argument.
+// Details: docs/dasp_core.md#conventions
 #pragma once
 
 #include <cstdint>
@@ -44,53 +45,45 @@ enum class SizeMode {
   kRadius,  ///< Fixed superpixel radius radius_m on the 3D surface (eq. 3.15).
 };
 
+/// Knobs of DASP kept for the ablations of docs/results/dasp.md; not thesis parameters, and the
+/// defaults are the thesis' algorithm. Details: docs/dasp_core.md#experimental-knobs
+struct DaspExperimental {
+  /// Extra weight of the camera-z component in the compactness term (0: the thesis' isotropic
+  /// d_DA, eq. 3.19). >= 0.
+  float weight_depth = 0.0f;
+  /// Exponent a of the depth in the density rho ~ D^a / n_z; 2 is eq. 3.15. One of 0, 0.5, 1,
+  /// 1.5, 2; for a != 2 radius_m is the radius at 1 m.
+  float depth_exponent = 2.0f;
+  /// Clamp of the slant factor 1/|n_z| in the density (eq. 3.15/3.16). >= 1.
+  float max_slant_factor = 5.0f;
+};
+
 /// Parameters of Depth-Adaptive Superpixels. Defaults are the thesis' values where it gives one.
 struct DaspConfig {
   SizeMode size_mode = SizeMode::kCount;
-  int superpixel_count = 1000;  ///< K in count mode; 1 <= K <= number of valid pixels.
-  float radius_m = 0.02f;       ///< Superpixel radius R on the surface in metres (radius mode).
-  int iterations = 5;           ///< DALIC iterations (thesis evaluation: 5).
-  float weight_spatial = 1.0f;  ///< mu_v: weight of the 3D compactness term |p - p_i|^2 / R^2.
-  float weight_color = 2.0f;    ///< mu_c: weight of the RGB term |c - c_i|^2, colours in [0, 1].
-  float weight_normal = 3.0f;   ///< mu_n: weight of the normal term 1 - n . n_i.
-  /// Extra weight of the depth (camera z) component in the 3D compactness term, which becomes
-  /// mu_v (|p - p_i|^2 + weight_depth (z - z_i)^2) / R^2. 0 (default) is the thesis' isotropic
-  /// d_DA. Larger values stretch superpixels along lines of equal depth: the depth compression
-  /// error falls and so do compactness and boundary recall (the thesis' "direct competition"
-  /// of compression error and compactness, app. A). The distance keeps its number of
-  /// operations (only per-cluster constants change). >= 0.
-  float weight_depth = 0.0f;
-  /// DALIC search window half-size as a multiple of the cluster's projected radius (C in alg. 3).
+  int superpixel_count = 1000;  ///< K in count mode (eq. 3.17); 1 <= K <= valid pixels.
+  float radius_m = 0.02f;       ///< Superpixel radius R on the surface, metres (radius mode).
+  int iterations = 5;           ///< DALIC iterations (alg. 3; thesis evaluation: 5).
+  /// Weights of d_DA (eq. 3.19-3.21): mu_v of the 3D term |p - p_i|^2 / R^2, mu_c of the RGB
+  /// term |c - c_i|^2 (colours in [0, 1]), mu_n of the normal term 1 - n . n_i.
+  float weight_spatial = 1.0f;
+  float weight_color = 2.0f;
+  float weight_normal = 3.0f;
+  /// DALIC search window half-size in units of the cluster's projected radius (C in alg. 3).
   float window_multiple = 1.5f;
-  SeedingMethod seeding = SeedingMethod::kSpdsImproved;
-  /// After the last iteration, every superpixel is made 4-connected on the surface (stray
-  /// pieces join the neighbour they share most border with; 4-neighbours across a depth jump of
-  /// more than depth_jump_ratio are not connected, so a superpixel never spans a depth
-  /// discontinuity). The thesis does not do this; users want it.
+  SeedingMethod seeding = SeedingMethod::kSpdsImproved;  ///< Seed sampling (§2.3, alg. 2).
+  int normal_step_px = 2;  ///< Step h of the depth finite differences, pixels (eq. 3.6, 3.7).
+  /// Make every superpixel 4-connected on the surface after the last iteration (not in the
+  /// thesis): docs/dasp_core.md#connectivity-enforcement
   bool enforce_connectivity = true;
-  /// Superpixels smaller than this fraction of their expected pixel area are purged (merged
-  /// into neighbours) during DALIC and replaced by splitting the heaviest ones (count mode).
+  /// Superpixels under this fraction of their expected pixel area are purged (unitless).
   float min_size_fraction = 0.1f;
-  /// Clamp of the slant factor 1/|n_z| in the density (eq. 3.15/3.16): surfaces steeper than
-  /// acos(1/clamp) (about 78.5 deg for 5) count as that steep, so noisy depth edges do not
-  /// attract huge numbers of superpixels.
-  float max_slant_factor = 5.0f;
-  /// Exponent a of the depth in the density, rho ~ D^a / n_z (clamped as above). 2 (default)
-  /// is eq. 3.15: every superpixel covers the same 3D area pi R^2, so far surfaces get many
-  /// superpixels of few pixels. Smaller values give far surfaces fewer, larger superpixels:
-  /// the 3D radius at depth D is R (D / 1 m)^((2 - a) / 2) (R, radius_m or the count mode's
-  /// radius, is then the radius at 1 m) and d_DA measures each cluster's compactness against its
-  /// own radius. 0 is uniform in the image apart from the slant factor. One of 0, 0.5, 1, 1.5, 2
-  /// (powers of 1 / sqrt(D): no per-pixel pow). docs/results/dasp.md measures 1 against 2.
-  float depth_exponent = 2.0f;
-  /// Step h in pixels of the depth finite differences for normals (eq. 3.6, 3.7).
-  int normal_step_px = 2;
-  /// Relative depth jump |dD| / D (unitless) above which two pixels lie across a depth edge: no
-  /// normal differences and no connectivity across it. Not in the thesis; why 0.02 and when to
-  /// raise it (f well below 525 px): docs/dasp_core.md#depth-jump-ratio
+  /// Relative depth jump |dD| / D (unitless) of a depth edge: no normal differences and no
+  /// connectivity across it. Not in the thesis: docs/dasp_core.md#depth-jump-ratio
   float depth_jump_ratio = 0.02f;
   std::uint64_t seed = 0;  ///< Seed of the random generator (sampling). Same seed, same output.
   int threads = 1;         ///< Worker threads: 1 = single-threaded, 0 = all cores (TBB).
+  DaspExperimental experimental;  ///< Ablation knobs; leave at their defaults.
 };
 
 /// Parameters of (colour-only) Adaptive Superpixels, the ASP_RGB baseline.
@@ -98,14 +91,13 @@ struct AspConfig {
   int superpixel_count = 1000;  ///< Wanted number of superpixels (constant density case).
   int iterations = 5;           ///< DALIC iterations.
   float weight_spatial = 1.0f;  ///< Weight of the compactness term (|u - u_i| / R_rho(u_i))^2.
-  /// Weight of the RGB term |c - c_i|^2, colours in [0, 1]. 100 matches SLIC's usual
-  /// compactness m = 10 in CIELAB: (100 / sqrt 3)^2 / m^2 per unit RGB distance squared against
-  /// pi (d / S)^2 = (d / R_rho)^2 for the spacing S, i.e. about 33 pi.
+  /// Weight of the RGB term |c - c_i|^2, colours in [0, 1]; 100 matches SLIC's compactness
+  /// m = 10 (docs/dasp_core.md#asp-colour-weight).
   float weight_color = 100.0f;
   float window_multiple = 1.5f;  ///< DALIC search window half-size in units of R_rho.
   SeedingMethod seeding = SeedingMethod::kSpdsImproved;
   bool enforce_connectivity = true;
-  float min_size_fraction = 0.1f;  ///< See DaspConfig::min_size_fraction.
+  float min_size_fraction = 0.1f;  ///< As DaspConfig::min_size_fraction.
   /// Optional user density (CV_32FC1, superpixels per pixel, >= 0, same size as the image).
   /// Empty: constant density. If given it is rescaled to integrate to superpixel_count.
   cv::Mat density;

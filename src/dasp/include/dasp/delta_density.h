@@ -9,7 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "dasp/dasp.h"
-#include "dasp/stages.h"
+#include "dasp/sampling.h"
 
 namespace dasp {
 
@@ -21,13 +21,8 @@ struct DeltaDensityConfig {
   /// The point kernels of eq. 2.5 are cut off at this many standard deviations.
   float kernel_cutoff_sigma = 3.0f;
   /// Gaussian smoothing of the delta density, in multiples of the mean superpixel radius
-  /// R_rho = 1 / sqrt(pi mean rho). The realised density of eq. 2.5 is a sum of bumps, so the
-  /// literal Delta rho of alg. 5 has positive and negative ripples of about one superpixel size
-  /// even where the density did not change, and every ripple makes SPDS remove or add points.
-  /// Smoothing at the superpixel scale cancels the ripples and keeps real changes (which span
-  /// several superpixels). 0 = the literal alg. 5 (not in the thesis: added for stability). On
-  /// real DASP densities re-sampled from their own SPDS points, the share of points removed or
-  /// added falls from 44% (0, literal) to 15% (1), 7% (2) and 4% (3) (docs/results/tdasp.md).
+  /// R_rho = 1 / sqrt(pi mean rho): cancels the superpixel-sized ripples of Delta rho. 0 = the
+  /// literal alg. 5. Not in the thesis: docs/dasp_core.md#delta-density-smoothing
   float smoothing_radius_multiple = 2.0f;
 };
 

@@ -142,5 +142,27 @@ UniformDistributionScores uniformDistributionError(const cv::Mat& labels, const 
 double relativeDensityError(const cv::Mat& density, const std::vector<cv::Point2d>& points,
                             const cv::Mat& mask = cv::Mat());
 
+/// Boundary matching counts of one segmentation (or one threshold) against a reference, the
+/// numbers behind BoundaryScores; counts of several images add up (ODS).
+struct BoundaryCounts {
+  double threshold = 0.0;
+  std::size_t partition_pixels = 0;  ///< |B(P)|
+  std::size_t precise_pixels = 0;    ///< of those, matched by a reference boundary pixel
+  std::size_t reference_pixels = 0;  ///< |B(X)|
+  std::size_t recalled_pixels = 0;   ///< of those, matched by a partition boundary pixel
+  double precision() const;          ///< 1 when there is no partition boundary (as above)
+  double recall() const;             ///< 1 when there is no reference boundary
+  double f1() const;
+  BoundaryCounts& operator+=(const BoundaryCounts& other);
+};
+
+/// Boundary counts of the segmentations (ucm >= t) for every t of `thresholds`, in one pass over
+/// the pixels: precision and recall equal boundaryScores(segmentation at t,
+/// ground_truth, mask, tolerance_px). ucm from ultrametricContourMap (dasp/segmentation.h)
+/// with the same mask.
+std::vector<BoundaryCounts> boundaryCurve(const cv::Mat& ucm, const cv::Mat& ground_truth,
+                                          const cv::Mat& mask, const std::vector<float>& thresholds,
+                                          int tolerance_px = kDefaultBoundaryTolerancePx);
+
 }  // namespace metrics
 }  // namespace dasp

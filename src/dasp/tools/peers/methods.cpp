@@ -10,7 +10,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "dasp/density.h"
 #include "dasp/metrics.h"
+#include "dasp/superpoints.h"
 #include "peers/peers.h"
 
 namespace dasp {
@@ -21,6 +23,28 @@ double threadCpuMilliseconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+// The settings of the DASP family (DaspConfig or AspConfig) that every one of them takes from the
+// options.
+template <class Config>
+Config daspFamilyConfig(const MethodOptions& options) {
+  Config config;
+  config.superpixel_count = options.superpixel_count;
+  config.iterations = options.iterations;
+  config.seed = options.seed;
+  config.threads = options.threads;
+  return config;
+}
+
+// DASP or ASP_RGBD (the RGB-D members of the DASP family).
+Superpixels runRgbdFamily(Method method, const RgbdFrame& frame, const MethodOptions& options) {
+  DaspConfig config = daspFamilyConfig<DaspConfig>(options);
+  config.depth_jump_ratio = options.depth_jump_ratio;
+  config.experimental = options.experimental;
+  if (method == Method::kDasp) return computeDasp(frame, config);
+  config.experimental.depth_exponent = DaspExperimental{}.depth_exponent;  // DASP's only
+  return computeAspRgbd(frame, config);
 }
 
 }  // namespace
@@ -66,29 +90,11 @@ MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOption
   const auto start = std::chrono::steady_clock::now();
   switch (method) {
     case Method::kDasp:
-    case Method::kAspRgbd: {
-      DaspConfig config;
-      config.superpixel_count = options.superpixel_count;
-      config.iterations = options.iterations;
-      config.seed = options.seed;
-      config.threads = options.threads;
-      config.max_slant_factor = options.max_slant_factor;
-      config.weight_depth = options.weight_depth;
-      config.depth_jump_ratio = options.depth_jump_ratio;
-      if (method == Method::kDasp) config.depth_exponent = options.depth_exponent;
-      Superpixels s =
-          method == Method::kDasp ? computeDasp(frame, config) : computeAspRgbd(frame, config);
-      result.labels = std::move(s.labels);
-      result.superpixels = std::move(s.superpixels);
-      break;
-    }
+    case Method::kAspRgbd:
     case Method::kAspRgb: {
-      AspConfig config;
-      config.superpixel_count = options.superpixel_count;
-      config.iterations = options.iterations;
-      config.seed = options.seed;
-      config.threads = options.threads;
-      Superpixels s = computeAspRgb(frame.color, config);
+      Superpixels s = method == Method::kAspRgb
+                          ? computeAspRgb(frame.color, daspFamilyConfig<AspConfig>(options))
+                          : runRgbdFamily(method, frame, options);
       result.labels = std::move(s.labels);
       result.superpixels = std::move(s.superpixels);
       break;

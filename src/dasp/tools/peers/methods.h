@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "dasp/dasp.h"
-#include "dasp/stages.h"
+#include "dasp/features.h"
 #include "peers/peers.h"
 
 namespace dasp {
@@ -31,10 +31,9 @@ struct MethodOptions {
   std::uint64_t seed = 0;       ///< Random seed of the DASP family.
   int threads = 1;              ///< Threads inside DASP / ASP (1 = single core, 0 = all).
   float vccs_seed_scale = VccsConfig{}.seed_scale;         ///< See VccsConfig::seed_scale.
-  float max_slant_factor = DaspConfig{}.max_slant_factor;  ///< DASP density clamp (dasp.h).
-  float weight_depth = DaspConfig{}.weight_depth;          ///< DASP depth weight (dasp.h).
   float depth_jump_ratio = DaspConfig{}.depth_jump_ratio;  ///< DASP depth jump (dasp.h).
-  float depth_exponent = DaspConfig{}.depth_exponent;      ///< DASP density exponent (dasp.h).
+  /// DASP's ablation knobs (dasp.h); ASP_RGBD takes all but depth_exponent.
+  DaspExperimental experimental;
 };
 
 /// Runs one method on a frame. labels: CV_32SC1, 0..n-1, -1 = unlabelled. `superpixels` is
@@ -51,7 +50,7 @@ struct MethodResult {
 MethodResult runMethod(Method method, const RgbdFrame& frame, const MethodOptions& options);
 
 /// Superpoint list for any label image (labels -1..n-1) from the frame's features: the
-/// superpoint fit of dasp/stages.h with the depth-adaptive density for n superpixels.
+/// superpoint fit of dasp/superpoints.h with the depth-adaptive density for n superpixels.
 std::vector<Superpixel> describeSuperpixels(const cv::Mat& labels, const PixelFeatures& features);
 
 /// Inputs of the metrics that do not depend on the method, computed once per frame.

@@ -2,7 +2,7 @@
 
 #include "peers/pcl_cloud.h"
 
-#include "dasp/stages.h"
+#include "dasp/features.h"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/seeds.hpp>
