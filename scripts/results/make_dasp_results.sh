@@ -21,7 +21,7 @@ cmake --build "${BUILD}" -j"${JOBS}" --target dasp_evaluate dasp_dasp_bench
 mkdir -p "${BUILD}/eval"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/main" \
   --methods DASP ASP_RGB ASP_RGBD SLIC SEEDS -k "${KS[@]}" -j "${JOBS}"
-# DASP with the extra depth weight (DaspConfig::weight_depth): the trade-off of depth compression
+# DASP with the extra depth weight (DaspConfig::experimental.weight_depth): the trade-off of depth compression
 # error against compactness, as methods DASP_wd<w>.
 for wd in 0.25 1; do
   "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_wd${wd}" \
@@ -32,7 +32,7 @@ done
   --methods DASP --depth-jump-ratio 0.05 --name-suffix "_jump0.05" -k "${KS[@]}" -j "${JOBS}"
 "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_k${ORIGINAL_COUNT}" \
   --methods DASP -k "${ORIGINAL_COUNT}" -j "${JOBS}"
-# DASP with other density clamps (DaspConfig::max_slant_factor) and more DALIC iterations.
+# DASP with other density clamps (DaspConfig::experimental.max_slant_factor) and more DALIC iterations.
 for clamp in 2 3; do
   "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_slant${clamp}" \
     --methods DASP --max-slant-factor "${clamp}" --name-suffix "_slant${clamp}" -k "${KS[@]}" \
@@ -43,7 +43,7 @@ for iterations in 10 20; do
     --methods DASP --iterations "${iterations}" --name-suffix "_it${iterations}" -k "${KS[@]}" \
     -j "${JOBS}"
 done
-# DASP with the density's depth exponent below the thesis' 2 (DaspConfig::depth_exponent), also
+# DASP with the density's depth exponent below the thesis' 2 (DaspConfig::experimental.depth_exponent), also
 # at the original's count.
 for exponent in 1 0.5; do
   "${BUILD}/dasp_evaluate" --data "${DATA}" --out "${BUILD}/eval/dasp_exp${exponent}" \
