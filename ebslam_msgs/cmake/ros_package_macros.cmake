@@ -1,0 +1,62 @@
+# The build every ROS package of this workspace shares (dasp_ros, ebslam_ros, edvs_driver): exported
+# by ebslam_msgs as a catkin CFG_EXTRAS file, so `find_package(catkin COMPONENTS ebslam_msgs ...)`
+# brings these in. Targets get C++17, the project warnings (errors) and the catkin libraries.
+
+# Language settings and ROS_PACKAGE_WARNINGS; call right after project().
+macro(ros_package_setup)
+  set(CMAKE_CXX_STANDARD 17)
+  set(CMAKE_CXX_STANDARD_REQUIRED ON)
+  set(CMAKE_CXX_EXTENSIONS OFF)
+  set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+  if(NOT CMAKE_BUILD_TYPE)
+    set(CMAKE_BUILD_TYPE RelWithDebInfo)
+  endif()
+  set(ROS_PACKAGE_WARNINGS -Wall -Wextra -Wpedantic -Werror)
+endmacro()
+
+# ros_package_target(<target> [LINK <libs>...] [DEPENDS <targets>...] [DEFINITIONS <defs>...])
+# Project warnings, catkin include directories and libraries, the messages and dynamic_reconfigure
+# headers built first, plus the given links, build dependencies and compile definitions.
+function(ros_package_target target)
+  cmake_parse_arguments(ARG "" "" "LINK;DEPENDS;DEFINITIONS" ${ARGN})
+  # Libraries pass includes and links on to what links them; executables (and catkin's test
+  # targets, linked with the plain signature) keep them.
+  get_target_property(type ${target} TYPE)
+  if(type MATCHES "LIBRARY")
+    target_include_directories(${target} PUBLIC ${catkin_INCLUDE_DIRS})
+    target_link_libraries(${target} PUBLIC ${ARG_LINK} ${catkin_LIBRARIES})
+  else()
+    target_include_directories(${target} PRIVATE ${catkin_INCLUDE_DIRS})
+    target_link_libraries(${target} ${ARG_LINK} ${catkin_LIBRARIES})
+  endif()
+  target_compile_options(${target} PRIVATE ${ROS_PACKAGE_WARNINGS})
+  if(catkin_EXPORTED_TARGETS)
+    add_dependencies(${target} ${catkin_EXPORTED_TARGETS})
+  endif()
+  if(TARGET ${PROJECT_NAME}_gencfg)
+    add_dependencies(${target} ${PROJECT_NAME}_gencfg)
+  endif()
+  if(ARG_DEPENDS)
+    add_dependencies(${target} ${ARG_DEPENDS})
+  endif()
+  if(ARG_DEFINITIONS)
+    target_compile_definitions(${target} PRIVATE ${ARG_DEFINITIONS})
+  endif()
+endfunction()
+
+# ros_package_rostest(<name> <file.test> <sources>... [LINK ...] [DEPENDS ...] [DEFINITIONS ...])
+# A rostest whose test node is the gtest program <name> built from <sources>.
+function(ros_package_rostest name test_file)
+  cmake_parse_arguments(ARG "" "" "LINK;DEPENDS;DEFINITIONS" ${ARGN})
+  add_rostest_gtest(${name} ${test_file} ${ARG_UNPARSED_ARGUMENTS})
+  ros_package_target(${name} LINK ${ARG_LINK} DEPENDS ${ARG_DEPENDS} DEFINITIONS ${ARG_DEFINITIONS})
+endfunction()
+
+# ros_package_gtest(<name> <sources>... [LINK ...] [DEPENDS ...] [DEFINITIONS ...])
+# A gtest program run without a ROS master.
+function(ros_package_gtest name)
+  cmake_parse_arguments(ARG "" "" "LINK;DEPENDS;DEFINITIONS" ${ARGN})
+  catkin_add_gtest(${name} ${ARG_UNPARSED_ARGUMENTS})
+  ros_package_target(${name} LINK ${ARG_LINK} gtest_main DEPENDS ${ARG_DEPENDS}
+    DEFINITIONS ${ARG_DEFINITIONS})
+endfunction()
