@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# `make test-sanitize`: builds the ROS-free core libraries (src/ebslam, src/dasp, the eDVS core of
-# edvs_driver) in Debug with AddressSanitizer and UndefinedBehaviorSanitizer (test/sanitize/)
-# and runs their tests under them. Any sanitizer finding fails its test; known false alarms of
-# uninstrumented Debian libraries are suppressed in test/sanitize/*.supp (each one explained).
+# `make test-sanitize`: builds the ROS-free core libraries (src/ebslam, src/dasp, src/edvs) in
+# Debug with AddressSanitizer and UndefinedBehaviorSanitizer (test/sanitize/) and runs their
+# tests under them. Any sanitizer finding fails its test; known false alarms of uninstrumented
+# Debian libraries are suppressed in test/sanitize/*.supp (each one explained).
 # Last line: "sanitize: N passed, N failed, N skipped".
 # Environment: SANITIZE_DIR (build folder, default <repo>/.ws/sanitize), JOBS (default: cores),
 # SANITIZE_RESULTS (JUnit folder, default <build folder>/test_results).
@@ -17,7 +17,7 @@ supp="${repo}/test/sanitize"
 start=$(date +%s)
 mkdir -p "${build}"
 if ! { cmake -S "${supp}" -B "${build}" -DCMAKE_BUILD_TYPE=Debug >"${build}/configure.log" 2>&1 &&
-       cmake --build "${build}" -j "${jobs}" --target ebslam_tests dasp_tests edvs_core_tests; }; then
+       cmake --build "${build}" -j "${jobs}" --target ebslam_tests dasp_tests edvs_tests; }; then
   tail -n 40 "${build}/configure.log"
   echo "test-sanitize: build failed"
   echo "sanitize: 0 passed, 1 failed"

@@ -4,6 +4,16 @@
 
 namespace edvs_driver {
 
+using edvs::biasName;
+using edvs::DeviceUri;
+using edvs::EdvsDevice;
+using edvs::kNumBiases;
+using edvs::parseDeviceUri;
+using edvs::parseEventFormat;
+using edvs::parseFirmware;
+using edvs::parseSyncMode;
+using edvs::Transport;
+
 namespace {
 
 [[noreturn]] void bad(const std::string& name, const std::string& why) {
@@ -19,15 +29,16 @@ void validate(const DriverParams& p) {
   if (p.publish_rate_hz == 0 && p.batch_size == 0) {
     bad("publish_rate", "publish_rate and batch_size are both 0: nothing would be published");
   }
-  if (p.reconnect_min_s <= 0) bad("reconnect_min_delay", "must be > 0 s");
-  if (p.reconnect_max_s < p.reconnect_min_s) bad("reconnect_max_delay", "must be >= the minimum");
+  if (p.link.reconnect_min_s <= 0) bad("reconnect_min_delay", "must be > 0 s");
+  if (p.link.reconnect_max_s < p.link.reconnect_min_s)
+    bad("reconnect_max_delay", "must be >= the minimum");
   if (p.stall_warn_s <= 0) bad("stall_timeout", "must be > 0 s");
-  if (p.stall_reconnect_s < p.stall_warn_s)
+  if (p.link.stall_reconnect_s < p.stall_warn_s)
     bad("stall_reconnect_timeout", "must be >= stall_timeout");
   if (p.device.on_bit != 0 && p.device.on_bit != 1) bad("on_bit", "must be 0 or 1");
   if (p.device.banner_timeout_ms <= 0) bad("banner_timeout", "must be > 0 ms");
   for (int i = 0; i < kNumBiases; ++i) {
-    const auto& v = p.biases[static_cast<std::size_t>(i)];
+    const auto& v = p.link.biases[static_cast<std::size_t>(i)];
     if (v && (*v < 0 || *v > 0xFFFFFF)) {
       bad(std::string("bias_") + biasName(i), "must be -1 (keep) or 0..16777215");
     }
@@ -60,13 +71,13 @@ DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
   p.camera_info_url = pnh.param<std::string>("camera_info_url", p.camera_info_url);
   p.publish_rate_hz = pnh.param("publish_rate", p.publish_rate_hz);
   p.batch_size = pnh.param("batch_size", p.batch_size);
-  p.reconnect_min_s = pnh.param("reconnect_min_delay", p.reconnect_min_s);
-  p.reconnect_max_s = pnh.param("reconnect_max_delay", p.reconnect_max_s);
+  p.link.reconnect_min_s = pnh.param("reconnect_min_delay", p.link.reconnect_min_s);
+  p.link.reconnect_max_s = pnh.param("reconnect_max_delay", p.link.reconnect_max_s);
   p.stall_warn_s = pnh.param("stall_timeout", p.stall_warn_s);
-  p.stall_reconnect_s = pnh.param("stall_reconnect_timeout", p.stall_reconnect_s);
+  p.link.stall_reconnect_s = pnh.param("stall_reconnect_timeout", p.link.stall_reconnect_s);
   for (int i = 0; i < kNumBiases; ++i) {
     const int v = pnh.param(std::string("bias_") + biasName(i), -1);
-    if (v >= 0) p.biases[static_cast<std::size_t>(i)] = v;
+    if (v >= 0) p.link.biases[static_cast<std::size_t>(i)] = v;
   }
   // The URI is parsed here too, so a typo fails at start-up with the parameter's name; its
   // format= and firmware= override ~format and ~firmware.

@@ -5,8 +5,8 @@
 #include <filesystem>
 
 #include "ebslam/event_io.h"
+#include "edvs/emulator.h"
 #include "edvs_driver/bag_io.h"
-#include "edvs_driver/emulator.h"
 #include "edvs_driver/ros_params.h"
 
 namespace {
@@ -19,7 +19,7 @@ std::string tempPath(const std::string& name) {
 }
 
 ebslam::EventVector sampleEvents(std::int64_t offset_us) {
-  ebslam::EventVector events = edvs_driver::generateEvents(5, 20000, 2000);
+  ebslam::EventVector events = edvs::generateEvents(5, 20000, 2000);
   for (auto& e : events) e.t_us += offset_us;
   return events;
 }
@@ -76,12 +76,12 @@ TEST(RosParams, ValidateNamesTheParameter) {
   q.frame_id = "";
   expectBad(q, "frame_id");
   q = p;
-  q.reconnect_max_s = 0.1;
+  q.link.reconnect_max_s = 0.1;
   expectBad(q, "reconnect_max_delay");
   q = p;
-  q.biases[2] = std::int64_t{1} << 24;
+  q.link.biases[2] = std::int64_t{1} << 24;
   expectBad(q, "bias_reqPd");
   q = p;
-  q.stall_reconnect_s = 0.5;
+  q.link.stall_reconnect_s = 0.5;
   expectBad(q, "stall_reconnect_timeout");
 }

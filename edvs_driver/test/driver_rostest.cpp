@@ -14,16 +14,16 @@
 #include <mutex>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "edvs/device.h"
+#include "edvs/emulator.h"
 #include "edvs_driver/bag_io.h"
-#include "edvs_driver/device.h"
-#include "edvs_driver/emulator.h"
 
 namespace {
 
 std::string linkPath() {
   std::string uri;
   if (!ros::param::get("/edvs_driver/uri", uri)) return "";
-  return edvs_driver::parseDeviceUri(uri).path;
+  return edvs::parseDeviceUri(uri).path;
 }
 
 /// Collects EventArray messages from a topic. The subscriber is the last member: it is
@@ -83,20 +83,20 @@ TEST(EdvsDriverNode, PublishesExactlyTheKnownSequenceAndBagPlaybackIsIdentical) 
   constexpr std::uint32_t kSeed = 5;
   constexpr double kRate = 5000;
   constexpr std::size_t kCount = 2000;
-  edvs_driver::EmulatorConfig ec;
+  edvs::EmulatorConfig ec;
   ec.link_path = link;
   ec.seed = kSeed;
   ec.rate_hz = kRate;
   ec.max_events = kCount;
   const std::int64_t before_us = ebslam_msgs::toMicroseconds(ros::Time::now());
-  auto emulator = std::make_unique<edvs_driver::Emulator>(ec);
+  auto emulator = std::make_unique<edvs::Emulator>(ec);
   ASSERT_TRUE(waitFor([&] { return sink.size() >= kCount; }, 30.0))
       << "received " << sink.size() << " of " << kCount << " events";
   ros::WallDuration(0.3).sleep();
   const std::int64_t after_us = ebslam_msgs::toMicroseconds(ros::Time::now());
 
   const ebslam::EventVector got = sink.events();
-  const ebslam::EventVector expected = edvs_driver::generateEvents(kSeed, kRate, kCount);
+  const ebslam::EventVector expected = edvs::generateEvents(kSeed, kRate, kCount);
   ASSERT_EQ(got.size(), expected.size());
   for (std::size_t i = 0; i < got.size(); ++i) {
     ASSERT_EQ(got[i].x, expected[i].x) << i;
@@ -180,14 +180,14 @@ TEST(EdvsDriverNode, RecoversAfterTheDeviceVanishesAndDiagnosticsSaySo) {
     mark = statuses.size();
   }
 
-  edvs_driver::EmulatorConfig ec;
+  edvs::EmulatorConfig ec;
   ec.link_path = link;
   ec.seed = 8;
   ec.rate_hz = 5000;
   // Long enough on both sides for the 1 Hz diagnostics to see each state.
   ec.vanish_after_events = 10000;  // 2 s of streaming
   ec.return_after_ms = 2500;
-  edvs_driver::Emulator emulator(ec);
+  edvs::Emulator emulator(ec);
   ASSERT_TRUE(waitFor([&] { return sink.size() >= 900; }, 20.0)) << sink.size();
   // Streaming (OK), then vanished (ERROR), then back (OK, naming the reconnects) in this order.
   std::size_t streaming = std::string::npos;

@@ -13,9 +13,9 @@
 #include <mutex>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "edvs_driver/device.h"
-#include "edvs_driver/emulator.h"
-#include "edvs_driver/stream_check.h"
+#include "edvs/device.h"
+#include "edvs/emulator.h"
+#include "edvs/stream_check.h"
 
 namespace {
 
@@ -87,7 +87,7 @@ bool waitFor(const std::function<bool()>& done, double timeout_s) {
 std::string uriPath(const std::string& param) {
   std::string uri;
   if (!ros::param::get(param, uri)) return "";
-  return edvs_driver::parseDeviceUri(uri).path;
+  return edvs::parseDeviceUri(uri).path;
 }
 
 }  // namespace
@@ -101,7 +101,7 @@ TEST(EdvsDriverNoise, NoisyLineKeepsTheClockAndDiagnosticsWarn) {
   ASSERT_TRUE(waitFor([&] { return sink.subscriber().getNumPublishers() > 0; }, 20.0));
 
   constexpr std::size_t kCount = 60000;  // 3 s at 20 k events/s
-  edvs_driver::EmulatorConfig ec;
+  edvs::EmulatorConfig ec;
   ec.link_path = link;
   ec.seed = 3;
   ec.rate_hz = 20000;
@@ -109,7 +109,7 @@ TEST(EdvsDriverNoise, NoisyLineKeepsTheClockAndDiagnosticsWarn) {
   ec.line_bytes_per_second = 1200000;  // 12 Mbit/s
   ec.garbage_probability = 0.02;
   for (std::size_t i = 1; i <= 10; ++i) ec.cut_events.push_back(i * 5000 + i * 37);
-  edvs_driver::Emulator emulator(ec);
+  edvs::Emulator emulator(ec);
   const std::size_t whole = kCount - ec.cut_events.size();
   // Diagnostics (1 Hz) go WARN with the noise counts while garbage arrives.
   EXPECT_TRUE(waitFor(
@@ -123,7 +123,7 @@ TEST(EdvsDriverNoise, NoisyLineKeepsTheClockAndDiagnosticsWarn) {
   const ebslam::EventVector sent = emulator.sentEvents();
   const ebslam::EventVector got = sink.events();
   // Stamps are anchor + device time: compare relative to the first event (offset found from it).
-  const auto c = edvs_driver::compareStreams(sent, got, true, 0, 64);
+  const auto c = edvs::compareStreams(sent, got, true, 0, 64);
   std::printf(
       "noisy line E2, garbage 2 %%, %zu cut: sent %zu published %zu lost %zu invented %zu final "
       "error %lld us backwards %zu\n",
@@ -143,8 +143,8 @@ TEST(EdvsDriverNoise, CaptureFileEndsAtItsEnd) {
   EventSink sink(nh, "/capture/events");
   DiagnosticsSink diagnostics(nh, "edvs_capture");
   ASSERT_TRUE(waitFor([&] { return sink.subscriber().getNumPublishers() > 0; }, 20.0));
-  const ebslam::EventVector events = edvs_driver::generateEvents(4, 5000, 3000);
-  const auto bytes = edvs_driver::encodeEvents(events, edvs_driver::EventFormat::kAbs24);
+  const ebslam::EventVector events = edvs::generateEvents(4, 5000, 3000);
+  const auto bytes = edvs::encodeEvents(events, edvs::EventFormat::kAbs24);
   {
     const std::string tmp = path + ".part";
     std::ofstream out(tmp, std::ios::binary);

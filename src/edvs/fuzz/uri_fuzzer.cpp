@@ -3,12 +3,12 @@
 #include <stdexcept>
 #include <string>
 
-#include "edvs_driver/device.h"
+#include "edvs/device.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string uri(reinterpret_cast<const char*>(data), size);
   try {
-    edvs_driver::parseDeviceUri(uri);
+    edvs::parseDeviceUri(uri);
   } catch (const std::invalid_argument&) {
   }
   return 0;

@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-namespace edvs_driver {
+namespace edvs {
 
 /// The device went away while open (unplugged, emulator closed, connection reset).
 class DeviceGone : public std::runtime_error {
@@ -68,4 +68,4 @@ int serialBaudRate(int fd);
 /// Sets a baud rate, standard or not (Linux BOTHER); returns false if the driver refuses.
 bool setSerialBaudRate(int fd, int baud);
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -2,18 +2,18 @@
 // 12 Mbit/s (the fastest eDVS line) carries about 600k events/s without timestamps.
 #include <benchmark/benchmark.h>
 
-#include "edvs_driver/emulator.h"
-#include "edvs_driver/protocol.h"
+#include "edvs/emulator.h"
+#include "edvs/protocol.h"
 
 namespace {
 
 void BM_Parse(benchmark::State& state) {
-  const auto format = static_cast<edvs_driver::EventFormat>(state.range(0));
-  const ebslam::EventVector events = edvs_driver::generateEvents(1, 200000, 200000);
-  const std::vector<std::uint8_t> bytes = edvs_driver::encodeEvents(events, format);
-  edvs_driver::ParserConfig cfg;
+  const auto format = static_cast<edvs::EventFormat>(state.range(0));
+  const ebslam::EventVector events = edvs::generateEvents(1, 200000, 200000);
+  const std::vector<std::uint8_t> bytes = edvs::encodeEvents(events, format);
+  edvs::ParserConfig cfg;
   cfg.format = format;
-  edvs_driver::EventParser parser(cfg);
+  edvs::EventParser parser(cfg);
   ebslam::EventVector out;
   out.reserve(events.size());
   std::int64_t host_us = 0;
@@ -32,7 +32,7 @@ void BM_Parse(benchmark::State& state) {
                           static_cast<std::int64_t>(events.size()));
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) *
                           static_cast<std::int64_t>(bytes.size()));
-  state.SetLabel(edvs_driver::toString(format));
+  state.SetLabel(edvs::toString(format));
 }
 
 }  // namespace

@@ -17,7 +17,7 @@
 
 #include "ebslam/event.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 /// What follows the two address bytes of an event on the wire.
 enum class EventFormat { kNone, kDelta, kAbs16, kAbs24, kAbs32 };
@@ -353,4 +353,4 @@ void encodeEvent(const ebslam::Event& event, EventFormat format, std::int64_t pr
 std::vector<std::uint8_t> encodeEvents(const ebslam::EventVector& events, EventFormat format,
                                        int on_bit = 1);
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -1,4 +1,4 @@
-#include "edvs_driver/transport.h"
+#include "edvs/transport.h"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 
@@ -276,4 +276,4 @@ std::unique_ptr<Transport> openCaptureFile(const std::string& path, double bytes
   return std::make_unique<CaptureFileTransport>(path, bytes_per_second);
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

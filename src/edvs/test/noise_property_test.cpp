@@ -21,14 +21,14 @@
 #include <set>
 #include <vector>
 
-#include "edvs_driver/protocol.h"
-#include "edvs_driver/stream_check.h"
+#include "edvs/protocol.h"
+#include "edvs/stream_check.h"
 
 using ebslam::Event;
 using ebslam::EventVector;
-using edvs_driver::EventFormat;
-using edvs_driver::EventParser;
-using edvs_driver::ParserConfig;
+using edvs::EventFormat;
+using edvs::EventParser;
+using edvs::ParserConfig;
 
 namespace {
 
@@ -59,8 +59,8 @@ struct NoisyLine {
 };
 
 struct Outcome {
-  edvs_driver::StreamComparison comparison;
-  edvs_driver::ParserStats stats;
+  edvs::StreamComparison comparison;
+  edvs::ParserStats stats;
 };
 
 /// Sends `events` with garbage before an event with probability `garbage` and `cuts` events cut
@@ -88,7 +88,7 @@ Outcome runNoisyLine(const EventVector& events, const ParserConfig& config, doub
       ++line.garbage_runs;
     }
     std::vector<std::uint8_t> encoded;
-    edvs_driver::encodeEvent(events[i], config.format, previous, config.on_bit, encoded);
+    edvs::encodeEvent(events[i], config.format, previous, config.on_bit, encoded);
     previous = events[i].t_us;
     if (cut_at.count(i) != 0) {
       encoded.resize(1 + rng() % (encoded.size() - 1));
@@ -120,15 +120,15 @@ Outcome runNoisyLine(const EventVector& events, const ParserConfig& config, doub
   parser.flush(got);
   const bool times = config.format != EventFormat::kNone && config.format != EventFormat::kDelta;
   Outcome outcome;
-  outcome.comparison = edvs_driver::compareStreams(
-      line.truth, got, times, edvs_driver::wrapPeriodUs(config.format), times ? 4096 : 64);
+  outcome.comparison = edvs::compareStreams(line.truth, got, times,
+                                            edvs::wrapPeriodUs(config.format), times ? 4096 : 64);
   outcome.stats = parser.stats();
   if (config.format != EventFormat::kDelta) {
     // Byte accounting: every byte was published in an event, dropped, or is still pending.
-    EXPECT_EQ(outcome.stats.events *
-                      static_cast<std::uint64_t>(edvs_driver::minEventBytes(config.format)) +
-                  outcome.stats.bytes_dropped + parser.pendingBytes(),
-              outcome.stats.bytes_in);
+    EXPECT_EQ(
+        outcome.stats.events * static_cast<std::uint64_t>(edvs::minEventBytes(config.format)) +
+            outcome.stats.bytes_dropped + parser.pendingBytes(),
+        outcome.stats.bytes_in);
   }
   if (line_out) *line_out = line;
   return outcome;
@@ -148,7 +148,7 @@ void print(const char* what, EventFormat f, double garbage, const Outcome& o) {
       "%s %s garbage %.3f: sent %zu published %zu lost %zu (%.3f %%) invented %zu (outside "
       "pixels %zu) backwards %zu max ahead %lld us final error %lld us; resyncs %llu rejected "
       "%llu implausible %llu dropped bytes %llu\n",
-      what, edvs_driver::toString(f), garbage, c.sent, c.published, c.lost, 100.0 * c.lostShare(),
+      what, edvs::toString(f), garbage, c.sent, c.published, c.lost, 100.0 * c.lostShare(),
       c.invented, c.invented_outside_pixels, c.backwards, static_cast<long long>(c.max_ahead_us),
       static_cast<long long>(c.final_error_us), static_cast<unsigned long long>(o.stats.resyncs),
       static_cast<unsigned long long>(o.stats.rejected_events),
@@ -166,8 +166,8 @@ TEST(NoisyLine, AbsoluteTimestampsKeepTheTrueClock) {
   for (EventFormat f : formats) {
     for (double g : rates) {
       for (double hz : event_rates) {
-        SCOPED_TRACE(std::string(edvs_driver::toString(f)) + " garbage " + std::to_string(g) +
-                     " rate " + std::to_string(hz));
+        SCOPED_TRACE(std::string(edvs::toString(f)) + " garbage " + std::to_string(g) + " rate " +
+                     std::to_string(hz));
         const EventVector events = makeStream(30000, hz, 100 + seed);
         ParserConfig cfg;
         cfg.format = f;
@@ -184,7 +184,7 @@ TEST(NoisyLine, AbsoluteTimestampsKeepTheTrueClock) {
           EXPECT_EQ(c.invented, 0u);
         }
         if (g > 0) {
-          EXPECT_GT(edvs_driver::noiseCount(o.stats), 0u);
+          EXPECT_GT(edvs::noiseCount(o.stats), 0u);
         }
       }
     }
@@ -198,7 +198,7 @@ TEST(NoisyLine, BarStreams150kEventsPerSecondFor3Seconds) {
   const EventFormat formats[] = {EventFormat::kAbs16, EventFormat::kAbs24, EventFormat::kAbs32};
   for (EventFormat f : formats) {
     for (double g : {0.01, 0.05}) {
-      SCOPED_TRACE(std::string(edvs_driver::toString(f)) + " garbage " + std::to_string(g));
+      SCOPED_TRACE(std::string(edvs::toString(f)) + " garbage " + std::to_string(g));
       const EventVector events = makeStream(450000, 150000.0, 7);
       ParserConfig cfg;
       cfg.format = f;
@@ -218,7 +218,7 @@ TEST(NoisyLine, BarStreams150kEventsPerSecondFor3Seconds) {
 TEST(NoisyLine, DeltaAndNoTimestampFormatsNeverRunBackwards) {
   for (EventFormat f : {EventFormat::kNone, EventFormat::kDelta}) {
     for (double g : {0.001, 0.01, 0.05}) {
-      SCOPED_TRACE(std::string(edvs_driver::toString(f)) + " garbage " + std::to_string(g));
+      SCOPED_TRACE(std::string(edvs::toString(f)) + " garbage " + std::to_string(g));
       const EventVector events = makeStream(30000, 150000.0, 21);
       ParserConfig cfg;
       cfg.format = f;
@@ -229,7 +229,7 @@ TEST(NoisyLine, DeltaAndNoTimestampFormatsNeverRunBackwards) {
       EXPECT_EQ(c.backwards, 0u);
       EXPECT_LT(c.lostShare(), 3 * g + 0.001);
       EXPECT_LT(c.inventedShare(), 3 * g + 0.001);
-      EXPECT_GT(edvs_driver::noiseCount(o.stats), 0u);
+      EXPECT_GT(edvs::noiseCount(o.stats), 0u);
     }
   }
 }

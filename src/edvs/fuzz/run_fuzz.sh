@@ -1,18 +1,18 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (ASan + UBSan) in a build directory outside the repo and
 # runs each for a while, merging new interesting inputs into the small corpus kept in the repo.
-#   edvs_driver/fuzz/run_fuzz.sh [seconds per target (default 180)] [build dir (default /tmp/edvs_fuzz)]
+#   src/edvs/fuzz/run_fuzz.sh [seconds per target (default 180)] [build dir (default /tmp/edvs_fuzz)]
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-pkg="$(dirname "${here}")"
-repo="$(dirname "${pkg}")"
+lib="$(dirname "${here}")"
+src="$(dirname "${lib}")"
 seconds="${1:-180}"
 build="${2:-/tmp/edvs_fuzz}"
 mkdir -p "${build}"
 flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
-  -I"${pkg}/include" -I"${repo}/src/ebslam/include")
-sources=("${pkg}/src/protocol.cpp" "${pkg}/src/device.cpp" "${pkg}/src/transport.cpp"
-  "${pkg}/src/serial_baud.cpp" "${pkg}/src/usb_discovery.cpp")
+  -I"${lib}/include" -I"${src}/ebslam/include")
+sources=("${lib}/src/protocol.cpp" "${lib}/src/device.cpp" "${lib}/src/transport.cpp"
+  "${lib}/src/serial_baud.cpp" "${lib}/src/usb_discovery.cpp")
 for target in parser_fuzzer uri_fuzzer; do
   clang++ "${flags[@]}" "${here}/${target}.cpp" "${sources[@]}" -lusb-1.0 -lpthread \
     -o "${build}/${target}"

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "ebslam/event.h"
-#include "edvs_driver/protocol.h"
+#include "edvs/protocol.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 /// Events of the seeded generator: uniform pixels and polarities, exponential inter-event times
 /// with mean 1e6 / rate_hz microseconds, the first at t = 0. Deterministic for a seed, so a test
@@ -97,4 +97,4 @@ class Emulator {
   std::thread thread_;
 };
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -8,9 +8,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "edvs_driver/transport.h"
+#include "edvs/transport.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 bool setSerialBaudRate(int fd, int baud) {
   if (baud <= 0) return false;
@@ -38,4 +38,4 @@ int serialBaudRate(int fd) {
   return static_cast<int>(tio.c_ospeed);
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

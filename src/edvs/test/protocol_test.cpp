@@ -4,14 +4,14 @@
 #include <random>
 #include <vector>
 
-#include "edvs_driver/protocol.h"
+#include "edvs/protocol.h"
 
 using ebslam::Event;
 using ebslam::EventVector;
-using edvs_driver::EventFormat;
-using edvs_driver::EventParser;
-using edvs_driver::Firmware;
-using edvs_driver::ParserConfig;
+using edvs::EventFormat;
+using edvs::EventParser;
+using edvs::Firmware;
+using edvs::ParserConfig;
 
 namespace {
 
@@ -67,7 +67,7 @@ void expectMonotonic(const EventVector& events) {
 }  // namespace
 
 TEST(Commands, LinesAndFormatNumbers) {
-  namespace cmd = edvs_driver::commands;
+  namespace cmd = edvs::commands;
   EXPECT_EQ(cmd::reset(), "R\n");
   EXPECT_EQ(cmd::echoOff(), "!U0\n");
   EXPECT_EQ(cmd::startStreaming(), "E+\n");
@@ -96,7 +96,7 @@ TEST(Commands, LinesAndFormatNumbers) {
 }
 
 TEST(Commands, ParseFormatNames) {
-  using edvs_driver::parseEventFormat;
+  using edvs::parseEventFormat;
   EXPECT_EQ(parseEventFormat("E2", Firmware::kCurrent), EventFormat::kAbs16);
   EXPECT_EQ(parseEventFormat("!E2", Firmware::kLegacy), EventFormat::kAbs24);
   EXPECT_EQ(parseEventFormat("e1", Firmware::kLegacy), EventFormat::kAbs16);
@@ -107,28 +107,28 @@ TEST(Commands, ParseFormatNames) {
   EXPECT_FALSE(parseEventFormat("E5", Firmware::kCurrent).has_value());
   EXPECT_FALSE(parseEventFormat("bogus", Firmware::kCurrent).has_value());
   for (int n = 0; n <= 4; ++n) {
-    const auto f = edvs_driver::formatFromCommandNumber(n, Firmware::kCurrent);
+    const auto f = edvs::formatFromCommandNumber(n, Firmware::kCurrent);
     ASSERT_TRUE(f.has_value());
-    EXPECT_EQ(edvs_driver::formatCommandNumber(*f, Firmware::kCurrent), n);
+    EXPECT_EQ(edvs::formatCommandNumber(*f, Firmware::kCurrent), n);
   }
   for (int n = 0; n <= 3; ++n) {
-    const auto f = edvs_driver::formatFromCommandNumber(n, Firmware::kLegacy);
+    const auto f = edvs::formatFromCommandNumber(n, Firmware::kLegacy);
     ASSERT_TRUE(f.has_value());
-    EXPECT_EQ(edvs_driver::formatCommandNumber(*f, Firmware::kLegacy), n);
+    EXPECT_EQ(edvs::formatCommandNumber(*f, Firmware::kLegacy), n);
   }
 }
 
 TEST(Commands, BiasNamesAndBanner) {
-  EXPECT_EQ(edvs_driver::biasIndex("cas"), 0);
-  EXPECT_EQ(edvs_driver::biasIndex("DIFFON"), 8);
-  EXPECT_EQ(edvs_driver::biasIndex("pr"), 11);
-  EXPECT_FALSE(edvs_driver::biasIndex("nope").has_value());
-  for (int i = 0; i < edvs_driver::kNumBiases; ++i) {
-    EXPECT_EQ(edvs_driver::biasIndex(edvs_driver::biasName(i)), i);
+  EXPECT_EQ(edvs::biasIndex("cas"), 0);
+  EXPECT_EQ(edvs::biasIndex("DIFFON"), 8);
+  EXPECT_EQ(edvs::biasIndex("pr"), 11);
+  EXPECT_FALSE(edvs::biasIndex("nope").has_value());
+  for (int i = 0; i < edvs::kNumBiases; ++i) {
+    EXPECT_EQ(edvs::biasIndex(edvs::biasName(i)), i);
   }
-  EXPECT_TRUE(edvs_driver::containsBanner("\x81\x02junk\nEDVS-4337 V2.1\n"));
-  EXPECT_TRUE(edvs_driver::containsBanner("meDVS128 ready"));
-  EXPECT_FALSE(edvs_driver::containsBanner("EDVS-433"));
+  EXPECT_TRUE(edvs::containsBanner("\x81\x02junk\nEDVS-4337 V2.1\n"));
+  EXPECT_TRUE(edvs::containsBanner("meDVS128 ready"));
+  EXPECT_FALSE(edvs::containsBanner("EDVS-433"));
 }
 
 TEST(Polarity, BitOneIsOnByDefault) {
@@ -152,7 +152,7 @@ TEST(Polarity, BitOneIsOnByDefault) {
   EXPECT_TRUE(out[1].polarity);
 
   // The encoder writes the same convention back.
-  EXPECT_EQ(edvs_driver::encodeEvents(events, EventFormat::kNone), bytes);
+  EXPECT_EQ(edvs::encodeEvents(events, EventFormat::kNone), bytes);
 }
 
 TEST(Parser, BigEndianTimestampBytes) {
@@ -170,10 +170,10 @@ TEST(Parser, BigEndianTimestampBytes) {
 }
 
 TEST(Parser, RoundTripEveryFormat) {
-  for (EventFormat f : edvs_driver::kAllEventFormats) {
-    SCOPED_TRACE(edvs_driver::toString(f));
+  for (EventFormat f : edvs::kAllEventFormats) {
+    SCOPED_TRACE(edvs::toString(f));
     const EventVector truth = randomEvents(3000, 7, 123456, 2000);
-    const auto bytes = edvs_driver::encodeEvents(truth, f);
+    const auto bytes = edvs::encodeEvents(truth, f);
     EventParser parser;
     const EventVector got = parseAll(bytes, f, &parser);
     ASSERT_EQ(got.size(), truth.size());
@@ -192,11 +192,11 @@ TEST(Parser, RoundTripEveryFormat) {
 }
 
 TEST(Parser, EveryByteBoundarySplit) {
-  for (EventFormat f : edvs_driver::kAllEventFormats) {
-    SCOPED_TRACE(edvs_driver::toString(f));
+  for (EventFormat f : edvs::kAllEventFormats) {
+    SCOPED_TRACE(edvs::toString(f));
     // Steps up to 30 ms: below half the 65.5 ms period of E2, so unambiguous without host time.
     const EventVector truth = randomEvents(12, 3, 5000, 30000);
-    const auto bytes = edvs_driver::encodeEvents(truth, f);
+    const auto bytes = edvs::encodeEvents(truth, f);
     const EventVector whole = parseAll(bytes, f);
     ASSERT_EQ(whole.size(), truth.size());
     // Every pair of split points: three reads.
@@ -227,8 +227,8 @@ TEST(Parser, EveryByteBoundarySplit) {
 
 TEST(Parser, TextGarbageBetweenEventsIsDroppedAndCounted) {
   std::mt19937 rng(11);
-  for (EventFormat f : edvs_driver::kAllEventFormats) {
-    SCOPED_TRACE(edvs_driver::toString(f));
+  for (EventFormat f : edvs::kAllEventFormats) {
+    SCOPED_TRACE(edvs::toString(f));
     const EventVector truth = randomEvents(2000, 5, 0, 500);
     std::vector<std::uint8_t> bytes;
     std::uint64_t garbage = 0;
@@ -240,7 +240,7 @@ TEST(Parser, TextGarbageBetweenEventsIsDroppedAndCounted) {
         for (int k = 0; k < n; ++k) bytes.push_back(static_cast<std::uint8_t>(rng() & 0x7F));
         garbage += static_cast<std::uint64_t>(n);
       }
-      edvs_driver::encodeEvent(e, f, prev, 1, bytes);
+      edvs::encodeEvent(e, f, prev, 1, bytes);
       prev = e.t_us;
     }
     EventParser parser;
@@ -259,8 +259,8 @@ TEST(Parser, ArbitraryGarbageResynchronises) {
   // Garbage with any bit pattern can look like events; the parser must lock onto the true
   // framing again and never let time run backwards.
   std::mt19937 rng(99);
-  for (EventFormat f : edvs_driver::kAllEventFormats) {
-    SCOPED_TRACE(edvs_driver::toString(f));
+  for (EventFormat f : edvs::kAllEventFormats) {
+    SCOPED_TRACE(edvs::toString(f));
     const EventVector truth = randomEvents(4000, 17, 0, 200);
     // One read per event, arriving at the host when the device stamped it (real time).
     ParserConfig cfg;
@@ -276,7 +276,7 @@ TEST(Parser, ArbitraryGarbageResynchronises) {
         for (int k = 0; k < n; ++k) bytes.push_back(static_cast<std::uint8_t>(rng()));
         ++bursts;
       }
-      edvs_driver::encodeEvent(truth[i], f, prev, 1, bytes);
+      edvs::encodeEvent(truth[i], f, prev, 1, bytes);
       prev = truth[i].t_us;
       parser.feed(bytes, truth[i].t_us + 7'000'000, got);
     }
@@ -319,7 +319,7 @@ TEST(Parser, ReadsThatDrainALongBacklogLoseNothing) {
   // meanwhile in one read: at E2's 65.5 ms period, more than the quarter-period step allowance
   // of device time can arrive at one host time. The stream must come through whole and exact.
   for (EventFormat f : {EventFormat::kAbs16, EventFormat::kAbs24, EventFormat::kAbs32}) {
-    SCOPED_TRACE(edvs_driver::toString(f));
+    SCOPED_TRACE(edvs::toString(f));
     for (std::uint32_t seed : {1u, 2u, 3u}) {
       SCOPED_TRACE(seed);
       const EventVector truth = randomEvents(6000, seed, 5000, 100);  // ~20k events/s
@@ -337,7 +337,7 @@ TEST(Parser, ReadsThatDrainALongBacklogLoseNothing) {
         const std::int64_t latency = 100 + static_cast<std::int64_t>(rng() % 900);
         bytes.clear();
         while (i < truth.size() && truth[i].t_us <= host - latency) {
-          edvs_driver::encodeEvent(truth[i], f, prev, 1, bytes);
+          edvs::encodeEvent(truth[i], f, prev, 1, bytes);
           prev = truth[i].t_us;
           ++i;
         }
@@ -354,8 +354,8 @@ TEST(Parser, ReadsThatDrainALongBacklogLoseNothing) {
 
 TEST(Parser, TimestampWrapsOfEveryFormat) {
   for (EventFormat f : kTimestamped) {
-    SCOPED_TRACE(edvs_driver::toString(f));
-    const std::int64_t period = edvs_driver::wrapPeriodUs(f);
+    SCOPED_TRACE(edvs::toString(f));
+    const std::int64_t period = edvs::wrapPeriodUs(f);
     // Start just before a wrap and cross several wraps with steps up to a third of the period
     // (delta format: up to the largest 28-bit delta).
     const std::int64_t max_step = period > 0 ? period / 3 : (std::int64_t{1} << 28) - 1;
@@ -365,7 +365,7 @@ TEST(Parser, TimestampWrapsOfEveryFormat) {
     EventVector truth = randomEvents(200, 21, t0);
     truth[1].t_us = truth[0].t_us + 1000;  // exactly at the wrap
     for (std::size_t i = 2; i < truth.size(); ++i) truth[i].t_us = truth[i - 1].t_us + step(rng);
-    const auto bytes = edvs_driver::encodeEvents(truth, f);
+    const auto bytes = edvs::encodeEvents(truth, f);
     EventParser parser;
     const EventVector got = parseAll(bytes, f, &parser);
     ASSERT_EQ(got.size(), truth.size());
@@ -389,9 +389,9 @@ TEST(Parser, GapLongerThanWrapPeriodRecoveredFromHostTime) {
   EventParser parser(cfg);
   EventVector out;
   std::vector<std::uint8_t> a, b;
-  edvs_driver::encodeEvent(truth[0], cfg.format, 0, 1, a);
-  edvs_driver::encodeEvent(truth[1], cfg.format, 0, 1, a);
-  edvs_driver::encodeEvent(truth[2], cfg.format, 0, 1, b);
+  edvs::encodeEvent(truth[0], cfg.format, 0, 1, a);
+  edvs::encodeEvent(truth[1], cfg.format, 0, 1, a);
+  edvs::encodeEvent(truth[2], cfg.format, 0, 1, b);
   parser.feed(a, 5'000'000, out);
   parser.noteIdle();                         // reads in between returned nothing
   parser.feed(b, 5'000'000 + 251'000, out);  // host saw it 251 ms later (1 ms latency)
@@ -407,7 +407,7 @@ TEST(Parser, GapLongerThanWrapPeriodRecoveredFromHostTime) {
   std::vector<std::uint8_t> c;
   ebslam::Event late = truth[1];
   late.t_us += 300;
-  edvs_driver::encodeEvent(late, cfg.format, 0, 1, c);
+  edvs::encodeEvent(late, cfg.format, 0, 1, c);
   busy.feed(a, 5'000'000, out3);
   busy.feed(c, 5'000'000 + 251'000, out3);
   busy.flush(out3);
@@ -443,7 +443,7 @@ TEST(Parser, NoTimestampFormatUsesMonotonicHostTime) {
 
 TEST(Parser, RandomBytesNeverRunBackwardsNorCrash) {
   std::mt19937 rng(5);
-  for (EventFormat f : edvs_driver::kAllEventFormats) {
+  for (EventFormat f : edvs::kAllEventFormats) {
     std::vector<std::uint8_t> bytes(20000);
     for (auto& b : bytes) b = static_cast<std::uint8_t>(rng());
     ParserConfig cfg;
@@ -472,10 +472,10 @@ TEST(Parser, WrongFormatAnnouncedIsDetected) {
   // The device streams one format while the host was told another (e.g. legacy firmware
   // numbering mix-up): the parser must flag it, and the guess must find the true format.
   std::mt19937 rng(8);
-  for (EventFormat sent : edvs_driver::kAllEventFormats) {
+  for (EventFormat sent : edvs::kAllEventFormats) {
     const EventVector truth = randomEvents(3000, 31 + static_cast<std::uint32_t>(sent), 0, 150);
-    const auto bytes = edvs_driver::encodeEvents(truth, sent);
-    for (EventFormat assumed : edvs_driver::kAllEventFormats) {
+    const auto bytes = edvs::encodeEvents(truth, sent);
+    for (EventFormat assumed : edvs::kAllEventFormats) {
       SCOPED_TRACE(std::string("sent ") + toString(sent) + " parsed as " + toString(assumed));
       ParserConfig cfg;
       cfg.format = assumed;
@@ -501,7 +501,7 @@ TEST(Parser, WrongFormatAnnouncedIsDetected) {
             << " jumps " << parser.stats().implausible_jumps << "/" << parser.stats().events;
       }
     }
-    const auto guess = edvs_driver::guessEventFormat(bytes);
+    const auto guess = edvs::guessEventFormat(bytes);
     EXPECT_EQ(guess.format, sent) << "guessed " << toString(guess.format) << " for "
                                   << toString(sent);
   }
@@ -534,10 +534,10 @@ TEST(Encoder, RejectsInvalidEvents) {
   std::vector<std::uint8_t> out;
   Event e;
   e.x = 128;
-  EXPECT_THROW(edvs_driver::encodeEvent(e, EventFormat::kNone, 0, 1, out), std::invalid_argument);
+  EXPECT_THROW(edvs::encodeEvent(e, EventFormat::kNone, 0, 1, out), std::invalid_argument);
   e.x = 1;
   e.t_us = 10;
-  EXPECT_THROW(edvs_driver::encodeEvent(e, EventFormat::kDelta, 20, 1, out), std::invalid_argument);
+  EXPECT_THROW(edvs::encodeEvent(e, EventFormat::kDelta, 20, 1, out), std::invalid_argument);
   e.t_us = std::int64_t{1} << 29;
-  EXPECT_THROW(edvs_driver::encodeEvent(e, EventFormat::kDelta, 0, 1, out), std::invalid_argument);
+  EXPECT_THROW(edvs::encodeEvent(e, EventFormat::kDelta, 0, 1, out), std::invalid_argument);
 }

@@ -3,11 +3,11 @@
 #include <cstdio>
 #include <exception>
 
-#include "edvs_driver/usb_discovery.h"
+#include "edvs/usb_discovery.h"
 
 int main() {
   try {
-    const auto devices = edvs_driver::listUsbSerialDevices();
+    const auto devices = edvs::listUsbSerialDevices();
     if (devices.empty()) {
       std::printf("no FTDI USB-serial bridge (vendor 0403) connected\n");
       return 1;

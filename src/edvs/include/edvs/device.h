@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "ebslam/event.h"
-#include "edvs_driver/protocol.h"
-#include "edvs_driver/transport.h"
+#include "edvs/protocol.h"
+#include "edvs/transport.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 struct DeviceUri {
   enum class Scheme { kSerial, kTcp, kFile };
@@ -132,4 +132,4 @@ std::unique_ptr<Transport> openTransport(const DeviceUri& uri);
 /// Monotonic host time [us] (CLOCK_MONOTONIC), the clock passed to the parser.
 std::int64_t monotonicMicros();
 
-}  // namespace edvs_driver
+}  // namespace edvs

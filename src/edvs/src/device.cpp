@@ -1,4 +1,4 @@
-#include "edvs_driver/device.h"
+#include "edvs/device.h"
 
 #include <time.h>
 
@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "edvs_driver/usb_discovery.h"
+#include "edvs/usb_discovery.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 
@@ -323,4 +323,4 @@ const DeviceStats& EdvsDevice::stats() const {
   return stats_;
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -1,4 +1,4 @@
-#include "edvs_driver/protocol.h"
+#include "edvs/protocol.h"
 
 #include <algorithm>
 #include <array>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 
@@ -875,4 +875,4 @@ std::vector<std::uint8_t> encodeEvents(const ebslam::EventVector& events, EventF
   return out;
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -1,4 +1,4 @@
-#include "edvs_driver/usb_discovery.h"
+#include "edvs/usb_discovery.h"
 
 #include <libusb-1.0/libusb.h>
 
@@ -7,7 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 
@@ -121,4 +121,4 @@ std::string findTtyBySerialNumber(const std::string& serial_number) {
                            " is connected; connected: " + (seen.empty() ? "none" : seen));
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

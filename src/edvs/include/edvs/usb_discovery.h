@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace edvs_driver {
+namespace edvs {
 
 inline constexpr std::uint16_t kFtdiVendorId = 0x0403;
 
@@ -31,4 +31,4 @@ std::vector<UsbSerialDevice> listUsbSerialDevices(std::uint16_t vendor_id = kFtd
 /// the serial numbers that are connected when none matches.
 std::string findTtyBySerialNumber(const std::string& serial_number);
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -9,7 +9,7 @@
 
 #include "ebslam/event.h"
 
-namespace edvs_driver {
+namespace edvs {
 
 struct StreamComparison {
   std::size_t sent = 0;       ///< events of the true stream
@@ -40,4 +40,4 @@ StreamComparison compareStreams(const ebslam::EventVector& sent, const ebslam::E
                                 bool compare_times, std::int64_t period_us = 0,
                                 std::size_t window = 4096);
 
-}  // namespace edvs_driver
+}  // namespace edvs

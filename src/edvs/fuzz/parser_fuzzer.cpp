@@ -4,17 +4,17 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "edvs_driver/protocol.h"
+#include "edvs/protocol.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return 0;
-  const auto format = static_cast<edvs_driver::EventFormat>(data[0] % 5);
+  const auto format = static_cast<edvs::EventFormat>(data[0] % 5);
   const std::size_t chunk = 1 + data[1] % 64;
   data += 2;
   size -= 2;
-  edvs_driver::ParserConfig cfg;
+  edvs::ParserConfig cfg;
   cfg.format = format;
-  edvs_driver::EventParser parser(cfg);
+  edvs::EventParser parser(cfg);
   ebslam::EventVector out;
   std::int64_t host = 0;
   for (std::size_t pos = 0; pos < size; pos += chunk) {
@@ -30,8 +30,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto& s = parser.stats();
   if (s.bytes_in != size || s.bytes_dropped > s.bytes_in) std::abort();
   // Fixed-size formats: every byte was published in an event, dropped, or is still pending.
-  const int frame = edvs_driver::minEventBytes(format);
-  if (format != edvs_driver::EventFormat::kDelta &&
+  const int frame = edvs::minEventBytes(format);
+  if (format != edvs::EventFormat::kDelta &&
       s.events * static_cast<std::uint64_t>(frame) + s.bytes_dropped + parser.pendingBytes() !=
           s.bytes_in) {
     std::abort();

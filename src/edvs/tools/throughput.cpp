@@ -16,9 +16,9 @@
 #include <random>
 #include <set>
 
-#include "edvs_driver/device.h"
-#include "edvs_driver/emulator.h"
-#include "edvs_driver/stream_check.h"
+#include "edvs/device.h"
+#include "edvs/emulator.h"
+#include "edvs/stream_check.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"End-to-end eDVS throughput through the pty emulator"};
@@ -38,9 +38,9 @@ int main(int argc, char** argv) {
   app.add_option("--cuts", cuts, "events cut in the middle (random, seeded)");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto f = edvs_driver::parseEventFormat(format, edvs_driver::Firmware::kCurrent);
+    const auto f = edvs::parseEventFormat(format, edvs::Firmware::kCurrent);
     if (!f) throw std::invalid_argument("bad --format");
-    edvs_driver::EmulatorConfig ec;
+    edvs::EmulatorConfig ec;
     ec.seed = 42;
     ec.rate_hz = rate;
     ec.max_events = count;
@@ -51,13 +51,13 @@ int main(int argc, char** argv) {
     while (cut_at.size() < std::min(cuts, count / 2)) cut_at.insert(1 + rng() % (count - 1));
     ec.cut_events.assign(cut_at.begin(), cut_at.end());
     const bool noisy = garbage > 0 || cuts > 0;
-    edvs_driver::Emulator emulator(ec);
-    edvs_driver::DeviceConfig dc;
+    edvs::Emulator emulator(ec);
+    edvs::DeviceConfig dc;
     dc.uri = emulator.uri();
     dc.format = *f;
     dc.command_gap_ms = 2;
     dc.infer_wraps_from_host_time = !no_infer;
-    edvs_driver::EdvsDevice device(dc);
+    edvs::EdvsDevice device(dc);
     device.open();
     ebslam::EventVector got;
     got.reserve(count);
@@ -72,12 +72,11 @@ int main(int argc, char** argv) {
     const double seconds = std::chrono::duration<double>(last - start).count();
     const ebslam::EventVector sent = emulator.sentEvents();
     if (noisy) {
-      const bool times =
-          *f != edvs_driver::EventFormat::kNone && *f != edvs_driver::EventFormat::kDelta;
-      const auto c = edvs_driver::compareStreams(sent, got, times, edvs_driver::wrapPeriodUs(*f),
-                                                 times ? 4096 : 64);
-      const edvs_driver::ParserStats& p = device.stats().parser;
-      const double invented_limit = *f == edvs_driver::EventFormat::kAbs16 ? 1e-4 : 0.0;
+      const bool times = *f != edvs::EventFormat::kNone && *f != edvs::EventFormat::kDelta;
+      const auto c =
+          edvs::compareStreams(sent, got, times, edvs::wrapPeriodUs(*f), times ? 4096 : 64);
+      const edvs::ParserStats& p = device.stats().parser;
+      const double invented_limit = *f == edvs::EventFormat::kAbs16 ? 1e-4 : 0.0;
       std::printf(
           "format %s  line %d bit/s  garbage %.3f (%lu bytes)  cut %zu\n"
           "sent %zu  published %zu  lost %zu (%.3f %%)  invented %zu (%zu with a pixel outside "
@@ -102,7 +101,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < std::min(got.size(), sent.size()); ++i) {
       const bool same = got[i].x == sent[i].x && got[i].y == sent[i].y &&
                         got[i].polarity == sent[i].polarity &&
-                        (*f == edvs_driver::EventFormat::kNone ||
+                        (*f == edvs::EventFormat::kNone ||
                          got[i].t_us - got[0].t_us == sent[i].t_us - sent[0].t_us);
       if (!same && mismatched++ == 0) {
         std::printf("first altered event %zu: got t=%lld x=%u y=%u, sent t=%lld x=%u y=%u\n", i,

@@ -1,8 +1,8 @@
-#include "edvs_driver/stream_check.h"
+#include "edvs/stream_check.h"
 
 #include <algorithm>
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 bool samePixel(const ebslam::Event& a, const ebslam::Event& b) {
@@ -70,4 +70,4 @@ StreamComparison compareStreams(const ebslam::EventVector& sent, const ebslam::E
   return c;
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "ebslam/event_io.h"
-#include "edvs_driver/emulator.h"
+#include "edvs/emulator.h"
 
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free, so safe to set from the signal handler
@@ -23,7 +23,7 @@ void onSignal(int) { g_stop = true; }
 
 int main(int argc, char** argv) {
   CLI::App app{"Emulated eDVS4337 on a pseudo-terminal or TCP port"};
-  edvs_driver::EmulatorConfig config;
+  edvs::EmulatorConfig config;
   std::string file, file_format, firmware = "current";
   int baud = 4000000;
   double duration_s = 0;
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   config.line_bytes_per_second = baud / 10.0;
   if (stall_after > 0) config.stall_after_events = stall_after;
   if (vanish_after > 0) config.vanish_after_events = vanish_after;
-  const auto fw = edvs_driver::parseFirmware(firmware);
+  const auto fw = edvs::parseFirmware(firmware);
   if (!fw) {
     std::fprintf(stderr, "edvs_emulator: --firmware must be current or legacy\n");
     return 2;
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
       while (at.size() < std::min(cuts, total / 2)) at.insert(1 + rng() % (total - 1));
       config.cut_events.assign(at.begin(), at.end());
     }
-    edvs_driver::Emulator emulator(config);
+    edvs::Emulator emulator(config);
     std::printf("edvs_emulator: device %s  (uri %s)\n", emulator.devicePath().c_str(),
                 emulator.uri().c_str());
     std::fflush(stdout);

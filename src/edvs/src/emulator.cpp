@@ -1,4 +1,4 @@
-#include "edvs_driver/emulator.h"
+#include "edvs/emulator.h"
 
 #include <arpa/inet.h>
 #include <fcntl.h>
@@ -18,7 +18,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace edvs_driver {
+namespace edvs {
 
 namespace {
 
@@ -586,4 +586,4 @@ int Emulator::appearances() const {
   return state_->appearances;
 }
 
-}  // namespace edvs_driver
+}  // namespace edvs

@@ -14,17 +14,17 @@
 #include <fstream>
 #include <thread>
 
-#include "edvs_driver/device.h"
-#include "edvs_driver/emulator.h"
-#include "edvs_driver/usb_discovery.h"
+#include "edvs/device.h"
+#include "edvs/emulator.h"
+#include "edvs/usb_discovery.h"
 
 using ebslam::EventVector;
-using edvs_driver::DeviceConfig;
-using edvs_driver::EdvsDevice;
-using edvs_driver::Emulator;
-using edvs_driver::EmulatorConfig;
-using edvs_driver::EventFormat;
-using edvs_driver::Firmware;
+using edvs::DeviceConfig;
+using edvs::EdvsDevice;
+using edvs::Emulator;
+using edvs::EmulatorConfig;
+using edvs::EventFormat;
+using edvs::Firmware;
 
 namespace {
 
@@ -61,7 +61,7 @@ std::string tempPath(const std::string& name) {
 }
 
 /// Records every write, to check one command per write.
-class RecordingTransport : public edvs_driver::Transport {
+class RecordingTransport : public edvs::Transport {
  public:
   explicit RecordingTransport(std::vector<std::string>* writes) : writes_(writes) {}
   std::size_t read(std::uint8_t* buffer, std::size_t size, int timeout_ms) override {
@@ -89,8 +89,8 @@ class RecordingTransport : public edvs_driver::Transport {
 }  // namespace
 
 TEST(DeviceUri, ParsesSchemesAndQueries) {
-  using edvs_driver::parseDeviceUri;
-  using Scheme = edvs_driver::DeviceUri::Scheme;
+  using edvs::parseDeviceUri;
+  using Scheme = edvs::DeviceUri::Scheme;
   auto u = parseDeviceUri("serial:///dev/ttyUSB0?baud=4000000&format=E2");
   EXPECT_EQ(u.scheme, Scheme::kSerial);
   EXPECT_EQ(u.path, "/dev/ttyUSB0");
@@ -126,27 +126,27 @@ TEST(SerialTransport, CustomBaudAndFlowControlOnPty) {
   const int fd = ::open(emulator.devicePath().c_str(), O_RDWR | O_NOCTTY);
   ASSERT_GE(fd, 0);
   for (int baud : {2000000, 4000000, 6000000, 8000000, 12000000}) {
-    EXPECT_TRUE(edvs_driver::setSerialBaudRate(fd, baud)) << baud;
-    EXPECT_EQ(edvs_driver::serialBaudRate(fd), baud);
+    EXPECT_TRUE(edvs::setSerialBaudRate(fd, baud)) << baud;
+    EXPECT_EQ(edvs::serialBaudRate(fd), baud);
   }
-  EXPECT_FALSE(edvs_driver::setSerialBaudRate(fd, 0));
+  EXPECT_FALSE(edvs::setSerialBaudRate(fd, 0));
   ::close(fd);
 
   // openSerial sets raw 8N1 with RTS/CTS on the node.
-  auto transport = edvs_driver::openSerial({emulator.devicePath(), 6000000, true});
+  auto transport = edvs::openSerial({emulator.devicePath(), 6000000, true});
   const int check = ::open(emulator.devicePath().c_str(), O_RDWR | O_NOCTTY);
   termios tio{};
   ASSERT_EQ(::tcgetattr(check, &tio), 0);
   EXPECT_TRUE(tio.c_cflag & CRTSCTS);
   EXPECT_EQ(tio.c_cflag & CSIZE, static_cast<tcflag_t>(CS8));
   EXPECT_FALSE(tio.c_lflag & ICANON);
-  EXPECT_EQ(edvs_driver::serialBaudRate(check), 6000000);
+  EXPECT_EQ(edvs::serialBaudRate(check), 6000000);
   ::close(check);
 }
 
 TEST(SerialTransport, MissingDeviceGivesClearError) {
   try {
-    edvs_driver::openSerial({"/dev/ttyUSB_no_such_edvs", 4000000, true});
+    edvs::openSerial({"/dev/ttyUSB_no_such_edvs", 4000000, true});
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/dev/ttyUSB_no_such_edvs"), std::string::npos);
@@ -155,7 +155,7 @@ TEST(SerialTransport, MissingDeviceGivesClearError) {
   // A regular file is not a serial port.
   const std::string file = tempPath("not_a_tty");
   std::ofstream(file) << "x";
-  EXPECT_THROW(edvs_driver::openSerial({file, 4000000, true}), std::runtime_error);
+  EXPECT_THROW(edvs::openSerial({file, 4000000, true}), std::runtime_error);
   std::filesystem::remove(file);
 }
 
@@ -218,7 +218,7 @@ TEST(Device, StreamsExactlyWhatTheEmulatorSentInEveryFormat) {
     } else {
       EXPECT_EQ(relative(got), relative(sent));
       // And the emulator sent the seeded sequence.
-      EXPECT_EQ(relative(sent), edvs_driver::generateEvents(3, 20000, 1500));
+      EXPECT_EQ(relative(sent), edvs::generateEvents(3, 20000, 1500));
     }
     EXPECT_EQ(device.stats().parser.bytes_dropped, 0u);
     EXPECT_TRUE(emulator.violations().empty());
@@ -229,9 +229,8 @@ TEST(Device, CommandSequenceOneCommandPerWriteBiasesOnlyWhileStreaming) {
   std::vector<std::string> writes;
   DeviceConfig cfg = configFor("serial:///dev/recorded", EventFormat::kAbs24);
   cfg.command_gap_ms = 0;
-  EdvsDevice device(cfg, [&](const edvs_driver::DeviceUri&) {
-    return std::make_unique<RecordingTransport>(&writes);
-  });
+  EdvsDevice device(
+      cfg, [&](const edvs::DeviceUri&) { return std::make_unique<RecordingTransport>(&writes); });
   device.setBias(0, 1067);  // before open: must wait for streaming
   device.open();
   device.setBias(8, 200000);
@@ -271,7 +270,7 @@ TEST(Device, BiasBeforeStreamingNeverReachesTheEmulator) {
 TEST(Device, EmulatorFreezesOnBiasWhileNotStreaming) {
   // The fault the driver avoids, shown to be detectable: a raw bias command freezes the device.
   Emulator emulator(EmulatorConfig{});
-  auto t = edvs_driver::openSerial({emulator.devicePath(), 4000000, true});
+  auto t = edvs::openSerial({emulator.devicePath(), 4000000, true});
   t->write("!B0=5\n");
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   t->write("E+\n");
@@ -352,7 +351,7 @@ TEST(Device, VanishAndComeBack) {
   while (!gone && std::chrono::steady_clock::now() < deadline) {
     try {
       device.read(got, 20);
-    } catch (const edvs_driver::DeviceGone&) {
+    } catch (const edvs::DeviceGone&) {
       gone = true;
     }
   }
@@ -396,12 +395,12 @@ TEST(Device, TcpTransportAgainstLoopbackEmulator) {
   device.start();
   const EventVector got = collect(device, 1000);
   EXPECT_EQ(relative(got), relative(emulator.sentEvents()));
-  EXPECT_EQ(relative(got), edvs_driver::generateEvents(12, 10000, 1000));
+  EXPECT_EQ(relative(got), edvs::generateEvents(12, 10000, 1000));
 }
 
 TEST(Device, CaptureFileReplay) {
-  const EventVector truth = edvs_driver::generateEvents(4, 5000, 700);
-  const auto bytes = edvs_driver::encodeEvents(truth, EventFormat::kAbs24);
+  const EventVector truth = edvs::generateEvents(4, 5000, 700);
+  const auto bytes = edvs::encodeEvents(truth, EventFormat::kAbs24);
   const std::string path = tempPath("capture.raw");
   {
     std::ofstream out(path, std::ios::binary);
@@ -416,22 +415,22 @@ TEST(Device, CaptureFileReplay) {
       {
         for (int i = 0; i < 1000; ++i) device.read(got, 10);
       },
-      edvs_driver::DeviceGone);
+      edvs::DeviceGone);
   EXPECT_EQ(relative(got), relative(truth));
   EXPECT_EQ(device.stats().parser.bytes_dropped, 4u);
   std::filesystem::remove(path);
 }
 
 TEST(UsbDiscovery, ListsWithoutCrashingAndNamesMissingSerial) {
-  std::vector<edvs_driver::UsbSerialDevice> devices;
+  std::vector<edvs::UsbSerialDevice> devices;
   try {
-    devices = edvs_driver::listUsbSerialDevices();
+    devices = edvs::listUsbSerialDevices();
   } catch (const std::runtime_error& e) {
     GTEST_SKIP() << "libusb unavailable here: " << e.what();
   }
-  for (const auto& d : devices) EXPECT_EQ(d.vendor_id, edvs_driver::kFtdiVendorId);
+  for (const auto& d : devices) EXPECT_EQ(d.vendor_id, edvs::kFtdiVendorId);
   try {
-    edvs_driver::findTtyBySerialNumber("NO-SUCH-EDVS-SERIAL");
+    edvs::findTtyBySerialNumber("NO-SUCH-EDVS-SERIAL");
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("NO-SUCH-EDVS-SERIAL"), std::string::npos);
