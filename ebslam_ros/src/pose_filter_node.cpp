@@ -110,9 +110,9 @@ PoseFilterNode::PoseFilterNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   start.num_particles = knobs_.num_particles;
   start.batch_size = knobs_.batch_size;
   start.resample_every = knobs_.resample_every;
-  start.reset_scores_on_resample = knobs_.reset_scores_on_resample;
+  start.reset_scores_on_resample = knobs_.experimental.reset_scores_on_resample;
   start.g0 = knobs_.g0;
-  start.diffusion_scale = knobs_.diffusion_scale;
+  start.diffusion_scale = knobs_.experimental.diffusion_scale;
   start.denoise = config_.denoise;
   start.denoise_window = 1e-6 * static_cast<double>(config_.denoiser.window_us);
   start.denoise_min_support = config_.denoiser.min_support;
@@ -377,9 +377,9 @@ void PoseFilterNode::onReconfigure(EventFilterKnobsConfig& k, std::uint32_t) {
   next.num_particles = k.num_particles;
   next.batch_size = k.batch_size;
   next.resample_every = k.resample_every;
-  next.reset_scores_on_resample = k.reset_scores_on_resample;
+  next.experimental.reset_scores_on_resample = k.reset_scores_on_resample;
   next.g0 = k.g0;
-  next.diffusion_scale = k.diffusion_scale;
+  next.experimental.diffusion_scale = k.diffusion_scale;
   ebslam::BackgroundActivityFilterConfig denoiser = config_.denoiser;
   denoiser.window_us = std::max<std::int64_t>(1, std::llround(k.denoise_window * 1e6));
   denoiser.min_support = k.denoise_min_support;

@@ -84,12 +84,13 @@ ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& nh,
   f.resample_every = param<int>(nh, "resample_every", f.resample_every);
   f.beta = param<double>(nh, "beta", f.beta);
   f.g0 = param<double>(nh, "g0", f.g0);
-  f.diffusion_scale = param<double>(nh, "diffusion_scale", f.diffusion_scale);
+  f.experimental.diffusion_scale =
+      param<double>(nh, "diffusion_scale", f.experimental.diffusion_scale);
   f.initial_spread_m = param<double>(nh, "initial_spread", f.initial_spread_m);
   f.initial_spread_rad = param<double>(nh, "initial_spread_rad", f.initial_spread_rad);
-  f.reset_scores_on_resample =
-      param<bool>(nh, "reset_scores_on_resample", f.reset_scores_on_resample);
-  f.adapt_g0 = param<bool>(nh, "adapt_g0", f.adapt_g0);
+  f.experimental.reset_scores_on_resample =
+      param<bool>(nh, "reset_scores_on_resample", f.experimental.reset_scores_on_resample);
+  f.experimental.adapt_g0 = param<bool>(nh, "adapt_g0", f.experimental.adapt_g0);
   f.latency_compensation_s = param<double>(nh, "latency_compensation", f.latency_compensation_s);
   const std::string estimate = param<std::string>(
       nh, "estimate", f.estimate == ebslam::PoseEstimateMode::kBestParticle ? "best" : "mean");

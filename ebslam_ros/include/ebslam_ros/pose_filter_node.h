@@ -17,8 +17,8 @@
 #include <tf2_ros/transform_listener.h>
 #include <boost/thread/recursive_mutex.hpp>
 
-#include <ebslam/ebpf.h>
 #include <ebslam/event_denoiser.h>
+#include <ebslam/event_filter.h>
 #include <ebslam/particles2d.h>
 
 #include <cstdint>

@@ -82,9 +82,9 @@ struct PoseFilterNodeConfig {
   ebslam::BackgroundActivityFilterConfig denoiser;
 };
 
-/// Common filter knobs (~num_particles, ~batch_size, ~resample_every, ~beta, ~g0,
-/// ~diffusion_scale, ~initial_spread, ~initial_spread_rad, ~reset_scores_on_resample,
-/// ~adapt_g0, ~estimate (mean|best), ~latency_compensation, ~seed) over `defaults`.
+/// Common filter knobs (~num_particles, ~batch_size, ~resample_every, ~beta, ~g0, ~initial_spread,
+/// ~initial_spread_rad, ~estimate (mean|best), ~latency_compensation, ~seed; into `experimental`:
+/// ~diffusion_scale, ~reset_scores_on_resample, ~adapt_g0) over `defaults`.
 ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& private_nh,
                                                 const ebslam::EventFilterConfig& defaults);
 PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& private_nh);

@@ -8,37 +8,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "event_batches.h"
-
 namespace ebslam {
-
-void EventFilterConfig::validate() const {
-  const auto fail = [](const std::string& what) {
-    throw std::invalid_argument("EventFilterConfig: " + what);
-  };
-  if (num_particles < 1) fail("num_particles must be >= 1");
-  if (batch_size < 1 || batch_size > 64) fail("batch_size must lie in [1, 64]");
-  if (resample_every < 1) fail("resample_every must be >= 1");
-  if (!(beta > 0.0 && beta < 1.0)) fail("beta must lie in (0, 1)");
-  if (!(g0 > 0.0) || !std::isfinite(g0)) fail("g0 must be positive and finite");
-  if (!(diffusion_scale >= 0.0) || !std::isfinite(diffusion_scale)) {
-    fail("diffusion_scale must be >= 0 and finite");
-  }
-  if (adapt_g0 &&
-      (!(adapt_g0_divisor > 0.0) || !(adapt_g0_min > 0.0) || !(adapt_g0_max >= adapt_g0_min))) {
-    fail("adaptive G0 needs divisor > 0 and 0 < min <= max");
-  }
-  if (!(latency_compensation_s >= 0.0) || !std::isfinite(latency_compensation_s)) {
-    fail("latency_compensation_s must be >= 0 and finite");
-  }
-  if (!(velocity_window_s > 0.0) || !std::isfinite(velocity_window_s)) {
-    fail("velocity_window_s must be positive and finite");
-  }
-  if (!(initial_spread_m >= 0.0) || !(initial_spread_rad >= 0.0) ||
-      !std::isfinite(initial_spread_m) || !std::isfinite(initial_spread_rad)) {
-    fail("initial spreads must be >= 0 and finite");
-  }
-}
 
 void EbpfConfig::validate() const {
   filter.validate();
@@ -75,58 +45,6 @@ GridMap2f makeEdgeLikelihoodMap(const cv::Mat& edges, double metres_per_pixel,
   return map;
 }
 
-void validateEvents(const Event* events, std::size_t count, int width, int height,
-                    std::int64_t& last_t_us) {
-  std::int64_t t = last_t_us;
-  for (std::size_t i = 0; i < count; ++i) {
-    const Event& e = events[i];
-    if (e.x >= width || e.y >= height) {
-      throw std::invalid_argument("event " + std::to_string(i) + " at (" + std::to_string(e.x) +
-                                  ", " + std::to_string(e.y) + ") lies outside the " +
-                                  std::to_string(width) + "x" + std::to_string(height) + " sensor");
-    }
-    if (e.t_us < t) {
-      throw std::invalid_argument("event " + std::to_string(i) + " has timestamp " +
-                                  std::to_string(e.t_us) + " us, earlier than its predecessor (" +
-                                  std::to_string(t) + " us): events must be time-ordered");
-    }
-    t = e.t_us;
-  }
-  last_t_us = t;
-}
-
-Diffusion perEventDiffusion(const EventFilterConfig& config, const CeilingCamera& camera,
-                            double g0) {
-  Diffusion d;
-  // eq. 6.9: Delta_x = D / (f G0); eq. 6.10: Delta_theta = 3 / (S G0) with S the sensor size.
-  d.sigma_xy_m = config.diffusion_scale * camera.wTrig() / g0;
-  d.sigma_theta_rad = config.diffusion_scale * 3.0 / (camera.width() * g0);
-  return d;
-}
-
-G0Tracker::G0Tracker(const EventFilterConfig& config, const CeilingCamera& camera,
-                     const Pose2& start)
-    : w_trig_(camera.wTrig()),
-      rotation_radius_px_(0.38247 * camera.width()),  // empirical factor below eq. 6.8
-      divisor_(config.adapt_g0_divisor),
-      min_(config.adapt_g0_min),
-      max_(config.adapt_g0_max),
-      window_start_(start) {}
-
-double G0Tracker::update(std::uint64_t events, const Pose2& estimate) {
-  window_events_ += events;
-  const double motion_px =
-      std::hypot(estimate.x - window_start_.x, estimate.y - window_start_.y) / w_trig_ +
-      std::abs(std::remainder(estimate.theta - window_start_.theta, 2.0 * M_PI)) *
-          rotation_radius_px_;
-  if (motion_px < 1.0) return 0.0;
-  const double density = static_cast<double>(window_events_) / motion_px;
-  smoothed_ = smoothed_ > 0.0 ? 0.7 * smoothed_ + 0.3 * density : density;
-  window_start_ = estimate;
-  window_events_ = 0;
-  return std::clamp(smoothed_ / divisor_, min_, max_);
-}
-
 void VelocityEstimator::add(double t_s, const Pose2& estimate) {
   if (!history_.empty() && (t_s < history_.back().t_s || t_s - history_.back().t_s > window_s_)) {
     history_.clear();
@@ -151,7 +69,7 @@ EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const Ceiling
     : config_(config),
       camera_(camera),
       likelihood_(std::move(likelihood)),
-      velocity_(config.filter.velocity_window_s),
+      velocity_(config.filter.experimental.velocity_window_s),
       last_t_us_(std::numeric_limits<std::int64_t>::min()) {
   config_.validate();
   if (likelihood_.data.empty()) {
@@ -161,17 +79,6 @@ EventParticleFilter::EventParticleFilter(const EbpfConfig& config, const Ceiling
   setG0(f.g0);
   g0_tracker_ = G0Tracker(f, camera_, start);
   particles_.reset(f.num_particles, start, f.initial_spread_m, f.initial_spread_rad, 1.0, f.seed);
-}
-
-G0Schedule makeG0Schedule(const EventFilterConfig& config, const CeilingCamera& camera, double g0) {
-  G0Schedule schedule;
-  schedule.g0 = g0;
-  schedule.alpha = decayFromInfluence(config.beta, g0);
-  schedule.diffusion = perEventDiffusion(config, camera, g0);
-  for (int b = 1; b <= config.batch_size; ++b) {
-    schedule.batch_decay.push_back(batchDecay(schedule.alpha, b));
-  }
-  return schedule;
 }
 
 void EventParticleFilter::setG0(double g0) {
@@ -184,7 +91,9 @@ void EventParticleFilter::setFilterConfig(const EventFilterConfig& filter) {
   next.validate();
   const Pose2 current = rawEstimate();
   const bool count_changed = filter.num_particles != config_.filter.num_particles;
-  const double g0 = filter.adapt_g0 && config_.filter.adapt_g0 ? schedule_.g0 : filter.g0;
+  const double g0 = filter.experimental.adapt_g0 && config_.filter.experimental.adapt_g0
+                        ? schedule_.g0
+                        : filter.g0;
   config_ = next;
   setG0(g0);
   if (count_changed) {
@@ -200,14 +109,14 @@ void EventParticleFilter::process(const Event* events, std::size_t count) {
   last_t_us_ = t;
 
   const EventFilterConfig& f = config_.filter;
-  detail::localiseInBatches(
+  localiseInBatches(
       events, count, camera_, f, schedule_, likelihood_, particles_, processed_, since_resample_,
       [&](const std::uint32_t*, int, bool resampled, std::size_t batch_end) {
         if (!resampled) return;
         if (f.latency_compensation_s > 0.0) {
           velocity_.add(1e-6 * static_cast<double>(events[batch_end - 1].t_us), rawEstimate());
         }
-        if (f.adapt_g0) {
+        if (f.experimental.adapt_g0) {
           const double g0 = g0_tracker_.update(f.resample_every, estimate());
           if (g0 > 0.0) setG0(g0);
         }

@@ -6,8 +6,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "event_batches.h"
-
 namespace ebslam {
 
 void Ebslam2dConfig::validate() const {
@@ -16,19 +14,20 @@ void Ebslam2dConfig::validate() const {
   const auto fail = [](const std::string& what) {
     throw std::invalid_argument("Ebslam2dConfig: " + what);
   };
+  const Experimental& x = experimental;
   if (!positive(cell_size_wtrig)) fail("cell_size_wtrig must be positive");
   if (!positive(map_size_m)) fail("map_size_m must be positive");
   if (!positive(splat_sigma_wtrig)) fail("splat_sigma_wtrig must be positive");
   if (!positive(normalisation_step_px)) fail("normalisation_step_px must be positive");
   if (!positive(normalisation_prior_px)) fail("normalisation_prior_px must be positive");
-  if (!positive(rate_window_s)) fail("rate_window_s must be positive");
-  if (!(noise_floor_gain_down > 0.0 && noise_floor_gain_down <= 1.0)) {
+  if (!positive(x.rate_window_s)) fail("rate_window_s must be positive");
+  if (!(x.noise_floor_gain_down > 0.0 && x.noise_floor_gain_down <= 1.0)) {
     fail("noise_floor_gain_down must be in (0, 1]");
   }
-  if (!(noise_floor_gain_up >= 0.0 && noise_floor_gain_up <= 1.0)) {
+  if (!(x.noise_floor_gain_up >= 0.0 && x.noise_floor_gain_up <= 1.0)) {
     fail("noise_floor_gain_up must be in [0, 1]");
   }
-  if (!(noise_floor_band >= 1.0 && std::isfinite(noise_floor_band))) {
+  if (!(x.noise_floor_band >= 1.0 && std::isfinite(x.noise_floor_band))) {
     fail("noise_floor_band must be >= 1");
   }
 }
@@ -93,14 +92,14 @@ void EventSlam2d::updateSignalFraction(int events, std::int64_t t_us) {
   }
   rate_window_events_ += static_cast<std::uint64_t>(events);
   const double dt = 1e-6 * static_cast<double>(t_us - rate_window_start_us_);
-  if (dt < config_.rate_window_s) return;
+  if (dt < config_.experimental.rate_window_s) return;
   const double rate = static_cast<double>(rate_window_events_) / dt;
   if (noise_floor_hz_ <= 0.0) {
     noise_floor_hz_ = rate;
   } else if (rate < noise_floor_hz_) {
-    noise_floor_hz_ += config_.noise_floor_gain_down * (rate - noise_floor_hz_);
-  } else if (rate < config_.noise_floor_band * noise_floor_hz_) {
-    noise_floor_hz_ += config_.noise_floor_gain_up * (rate - noise_floor_hz_);
+    noise_floor_hz_ += config_.experimental.noise_floor_gain_down * (rate - noise_floor_hz_);
+  } else if (rate < config_.experimental.noise_floor_band * noise_floor_hz_) {
+    noise_floor_hz_ += config_.experimental.noise_floor_gain_up * (rate - noise_floor_hz_);
   }
   // Window rates of pure background activity scatter by 1 / sqrt(n) (Poisson): rates within two
   // standard deviations above the background estimate count as background.
@@ -116,7 +115,9 @@ void EventSlam2d::setFilterConfig(const EventFilterConfig& filter) {
   next.validate();
   const Pose2 current = estimate();
   const bool count_changed = filter.num_particles != config_.filter.num_particles;
-  const double g0 = filter.adapt_g0 && config_.filter.adapt_g0 ? schedule_.g0 : filter.g0;
+  const double g0 = filter.experimental.adapt_g0 && config_.filter.experimental.adapt_g0
+                        ? schedule_.g0
+                        : filter.g0;
   config_ = next;
   setG0(g0);
   if (count_changed) {
@@ -134,13 +135,13 @@ void EventSlam2d::process(const Event* events, std::size_t count) {
   const EventFilterConfig& f = config_.filter;
   // Localisation: EB-PF steps against the current map M (alg. 8, "update particles"), then
   // mapping after every batch.
-  detail::localiseInBatches(
+  localiseInBatches(
       events, count, camera_, f, schedule_, map_, particles_, processed_, since_resample_,
       [&](const std::uint32_t* index, int b, bool resampled, std::size_t batch_end) {
         if (config_.noise_aware_diffusion) updateSignalFraction(b, events[batch_end - 1].t_us);
         // Mapping: occurrence splats (eq. 7.6) at the expected pose or at every particle.
         particles_.weightedMean(expected_.x, expected_.y, expected_.c, expected_.s);
-        if (resampled && f.adapt_g0) {
+        if (resampled && f.experimental.adapt_g0) {
           const double g0 = g0_tracker_.update(f.resample_every, expected_.pose());
           if (g0 > 0.0) setG0(g0);
         }

@@ -194,10 +194,10 @@ TEST(Ebslam2d, NoiseAwareDiffusionHoldsStillUnderBackgroundActivity) {
   EXPECT_LT(error_aware, std::max(0.08, 1.5 * error_plain)) << error_plain;
 
   Ebslam2dConfig bad;
-  bad.rate_window_s = 0.0;
+  bad.experimental.rate_window_s = 0.0;
   EXPECT_THROW(EventSlam2d(bad, camera), std::invalid_argument);
   bad = Ebslam2dConfig{};
-  bad.noise_floor_band = 0.5;
+  bad.experimental.noise_floor_band = 0.5;
   EXPECT_THROW(EventSlam2d(bad, camera), std::invalid_argument);
 }
 

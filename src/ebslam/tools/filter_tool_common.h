@@ -15,7 +15,7 @@
 
 #include "ebslam/camera_model.h"
 #include "ebslam/ceiling_camera.h"
-#include "ebslam/ebpf.h"
+#include "ebslam/event_filter.h"
 #include "ebslam/event_io.h"
 #include "ebslam/trajectory.h"
 
@@ -73,7 +73,8 @@ inline void addFilterOptions(CLI::App& app, EventFilterConfig& f) {
       ->capture_default_str();
   app.add_option("--g0", f.g0, "effective feature count G0 (eq. 6.9, 6.10, 6.27)")
       ->capture_default_str();
-  app.add_option("--diffusion-scale", f.diffusion_scale, "factor on the diffusion (eq. 6.38)")
+  app.add_option("--diffusion-scale", f.experimental.diffusion_scale,
+                 "factor on the diffusion (eq. 6.38)")
       ->capture_default_str();
   app.add_option("--initial-spread", f.initial_spread_m, "initial position spread [m]")
       ->capture_default_str();
@@ -81,15 +82,18 @@ inline void addFilterOptions(CLI::App& app, EventFilterConfig& f) {
       ->capture_default_str();
   app.add_flag("--best-particle", "report the best particle instead of the weighted mean")
       ->each([&f](const std::string&) { f.estimate = PoseEstimateMode::kBestParticle; });
-  app.add_flag("--reset-scores", f.reset_scores_on_resample,
+  app.add_flag("--reset-scores", f.experimental.reset_scores_on_resample,
                "reset all scores to their mean on resampling (default: children inherit)");
-  app.add_flag("--adapt-g0", f.adapt_g0, "estimate G0 online from events per pixel of motion");
-  app.add_option("--adapt-g0-divisor", f.adapt_g0_divisor, "adaptive G0 = events/pixel / this")
+  app.add_flag("--adapt-g0", f.experimental.adapt_g0,
+               "estimate G0 online from events per pixel of motion");
+  app.add_option("--adapt-g0-divisor", f.experimental.adapt_g0_divisor,
+                 "adaptive G0 = events/pixel / this")
       ->capture_default_str();
   app.add_option("--latency", f.latency_compensation_s,
                  "report the pose extrapolated by this event latency [s]")
       ->capture_default_str();
-  app.add_option("--velocity-window", f.velocity_window_s, "velocity estimate baseline [s]")
+  app.add_option("--velocity-window", f.experimental.velocity_window_s,
+                 "velocity estimate baseline [s]")
       ->capture_default_str();
   app.add_option("--seed", f.seed, "random seed")->capture_default_str();
 }

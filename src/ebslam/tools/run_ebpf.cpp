@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "ebslam/ebpf.h"
 #include "ebslam/ebslam2d.h"
 #include "filter_tool_common.h"
 

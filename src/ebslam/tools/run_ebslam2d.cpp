@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
   app.add_flag("--noise-aware", config.noise_aware_diffusion,
                "scale the per-event diffusion by the estimated signal fraction (robust start "
                "under background activity)");
-  app.add_option("--rate-window", config.rate_window_s,
+  app.add_option("--rate-window", config.experimental.rate_window_s,
                  "event-rate window of the noise-aware diffusion [s]")
       ->capture_default_str();
   app.add_option("-o,--trajectory", trajectory_path, "output TUM trajectory");

@@ -167,11 +167,8 @@ struct DedvsCalibrationConfig {
   /// Correspondences whose final residual is below this count as inliers [px]; the RMSE is
   /// over the inliers.
   double inlier_threshold_px = 3.0;
-  /// A third solve uses only the correspondences within outlier_sigmas robust standard
-  /// deviations (1.4826 x the median residual of the second solve) and within
-  /// inlier_threshold_px; they are the inliers then. The LED's centroid has a tail of errors of
-  /// a pixel or so (the plate starting or stopping within a window) that a Cauchy loss of 1 px
-  /// still weights. 0 = no third solve.
+  /// A third solve keeps the correspondences within this many robust standard deviations and
+  /// inlier_threshold_px (0 = none). Why: docs/dedvs_core.md#calibration
   double outlier_sigmas = 3.0;
   int max_iterations = 200;  ///< per stage
   /// Fewer correspondences throw (11 parameters; a few per parameter are needed for the

@@ -14,8 +14,8 @@
 #include <opencv2/core.hpp>
 
 #include "ebslam/ceiling_camera.h"
-#include "ebslam/ebpf.h"
 #include "ebslam/event.h"
+#include "ebslam/event_filter.h"
 #include "ebslam/particles2d.h"
 
 namespace ebslam {
@@ -27,10 +27,8 @@ enum class OccurrenceSplat {
 };
 
 struct Ebslam2dConfig {
-  /// Localisation (thesis table 7.1 uses N = 5..75; 10 is the smallest with a good RMSE).
-  /// G0 = 30 rather than EB-PF's 60: against the map being built, which starts empty and lags
-  /// the true edges, the particles need the wider diffusion to stay on the motion (30, 60 and
-  /// 100 compared over all simulated freiburg2_pioneer_* runs, docs/results/events2d.md).
+  /// Localisation: N = 10 (table 7.1 uses 5..75), G0 = 30 against the growing map (EB-PF: 60).
+  /// Why: docs/ebslam_core.md#eb-slam-2d
   EventFilterConfig filter = [] {
     EventFilterConfig f;
     f.num_particles = 10;
@@ -45,24 +43,26 @@ struct Ebslam2dConfig {
   /// is cut at 3 sigma.
   double splat_sigma_wtrig = 0.5;
   OccurrenceSplat splat = OccurrenceSplat::kExpectedPose;
-  /// Z is updated when the expected pose has moved the image by this much [pixels] since the
-  /// last update (largest pixel displacement over the sensor).
+  /// Z is updated once the expected pose has moved the image by this much [pixels] (largest
+  /// pixel displacement over the sensor; eq. 7.7).
   double normalisation_step_px = 1.0;
   /// Z0: prior number of possible observations per cell [pixels of path], see the file comment.
   double normalisation_prior_px = 1.0;
-  /// Noise-aware diffusion (robust start under background activity): the per-event diffusion
-  /// variance (eq. 6.9/6.10) is scaled by the estimated signal fraction
-  /// 1 - (1 + 2 / sqrt(n)) r_noise / r of the event rate r (n events per rate_window_s; r_noise
-  /// estimated online); no diffusion before the first window. false = the thesis' model.
-  /// Why and measurements: docs/ebslam_core.md#noise-aware-diffusion
+  /// Scale the per-event diffusion by the estimated signal fraction of the event rate (robust
+  /// start under background activity; false = the thesis).
+  /// docs/ebslam_core.md#noise-aware-diffusion
   bool noise_aware_diffusion = false;
-  double rate_window_s = 0.02;  ///< window of the event rate [s]
-  /// Gains of the background-rate estimate per window: towards a lower rate, towards a higher
-  /// rate below noise_floor_band times it (window rates of pure background activity scatter by
-  /// 1 / sqrt(events per window) around it; motion adds far more).
-  double noise_floor_gain_down = 0.3;
-  double noise_floor_gain_up = 0.05;
-  double noise_floor_band = 1.25;
+
+  /// Tuning of the noise-aware diffusion, chosen on one simulated run (see the link above).
+  struct Experimental {
+    double rate_window_s = 0.02;  ///< window of the event rate [s]
+    /// Gains of the background-rate estimate per window: towards a lower rate, and towards a
+    /// higher rate below noise_floor_band times it.
+    double noise_floor_gain_down = 0.3;
+    double noise_floor_gain_up = 0.05;
+    double noise_floor_band = 1.25;
+  };
+  Experimental experimental;
 
   /// Throws std::invalid_argument naming the offending parameter.
   void validate() const;
@@ -74,7 +74,7 @@ class EventSlam2d {
   /// Throws std::invalid_argument for an invalid config.
   EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& camera, const Pose2& start = {});
 
-  /// Processes events in order (batches of B; see EventParticleFilter::process for validation:
+  /// Processes events in order (batches of B; validated as in EventParticleFilter::process:
   /// events outside the sensor or earlier than their predecessor throw std::invalid_argument and
   /// nothing of the call is processed; an empty span is a no-op).
   void process(const Event* events, std::size_t count);

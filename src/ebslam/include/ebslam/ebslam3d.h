@@ -15,7 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "ebslam/integration.h"
+#include "ebslam/exponential_decay.h"
 #include "ebslam/particles2d.h"
 #include "ebslam/voxel_map.h"
 
@@ -46,10 +46,8 @@ struct Ebslam3dConfig {
   int batch_size = 3;        ///< B in [1, 64] (default set: 3)
   int resample_every = 100;  ///< K: events between resamplings (default set: 100)
   double event_share = 1.0;  ///< share of the accepted events used, (0, 1] (default set: all)
-  /// Per-event diffusion: position [m] and rotation angle [rad] standard deviations
-  /// (eq. 8.11-8.15). The thesis' default set names 0.008 for both without a unit or a time
-  /// base; 0.008 per event diverged on the synthetic runs tried (fr1_xyz: 0.77 m RMSE); 3e-4
-  /// lost the faster fr1_desk rotations; 1e-3 tracks both (first 8 s of fr1_desk: 2.1 cm).
+  /// Per-event diffusion std. devs (eq. 8.11-8.15): position [m], rotation angle [rad]; 1e-3,
+  /// not the default set's 0.008: docs/ebslam_core.md#eb-slam-3d-diffusion
   double sigma_position_m = 1e-3;
   double sigma_rotation_rad = 1e-3;
   /// alpha of the score update (alg. 9), per event.

@@ -16,12 +16,7 @@ namespace ebslam {
 
 struct BackgroundActivityFilterConfig {
   /// Support window [us]: only neighbour events at most this long before an event count.
-  /// Defaults (100 ms, three neighbours of the event's polarity) chosen on the simulated
-  /// freiburg2_pioneer_360 run at 1 Hz per pixel (largest signal kept + noise removed over
-  /// windows 10-200 ms, support 1-4, with and without polarity: 91.3 % kept, 88.0 % removed) and
-  /// scored on freiburg2_pioneer_slam (docs/results/events2d.md: 91.7 %, 87.4 %). The classic
-  /// filter is min_support = 1, polarity_match = false (jAER's default window is 30 ms); on these
-  /// slow scenes it keeps only 72 % of the signal at 10 ms while removing 81 % of the noise.
+  /// Defaults chosen for slow floor robots: docs/ebslam_core.md#background-activity-defaults
   std::int64_t window_us = 100000;
   /// Number of neighbouring pixels that must have fired within the window, in [1, 8].
   int min_support = 3;

@@ -32,10 +32,8 @@ struct EventModelConfig {
   /// time (Poisson process). Real DVS128-class sensors show 0.1-1 Hz and more (it rises with
   /// temperature and in dim light).
   double noise_rate_hz_per_pixel = 0.1;
-  /// Spread of the background rate across pixels: standard deviation of the natural log of a
-  /// pixel's rate (log-normal, scaled so that the mean stays noise_rate_hz_per_pixel). Measured
-  /// DVS background rates vary by about an order of magnitude between pixels (sigma ~ 1);
-  /// 0 = every pixel at the same rate.
+  /// Spread of the background rate across pixels: std. dev. of ln(rate), log-normal with the
+  /// mean kept (0 = one rate; measured DVS pixels: about 1, an order of magnitude).
   double noise_rate_log_sigma = 0.0;
   /// Fraction of hot pixels in [0, 1]: pixels (chosen at random) that fire noise at
   /// hot_pixel_rate_hz instead of their background rate.

@@ -55,12 +55,9 @@ struct ExplorationConfig {
   /// Cells whose centre lies within this distance of the robot are covered (E += 1) [m]; the
   /// robot's radius.
   double robot_radius_m = 0.15;
-  /// After a bump, cells in a cone around the contact direction are blocked: centres within
-  /// robot_radius_m + bump_cone_depth_m of the robot and within the half angle.
-  /// A wide cone (60 degrees each side): a cell beside the contact whose centre lies closer to
-  /// a straight wall than the robot radius cannot hold the robot's centre anyway, and sealing
-  /// the room boundary then costs fewer bumps (chosen on tuning seed 101, not the evaluation
-  /// seeds).
+  /// After a bump, the cells in a cone around the contact direction are blocked: centres within
+  /// robot_radius_m + bump_cone_depth_m [m] and the half angle [rad].
+  /// docs/ebslam_core.md#exploration
   double bump_cone_depth_m = 0.3;
   double bump_cone_half_angle_rad = 1.05;
   /// Gain (eq. 7.9, 7.10): weights and slope; the thesis' values.
@@ -80,9 +77,8 @@ struct ExplorationConfig {
   /// Controller: waypoint reached within this distance [m]; turn in place while the heading
   /// error exceeds turn_in_place_rad; omega = heading_gain * error.
   double waypoint_tolerance_m = 0.06;
-  /// Pure-pursuit look-ahead: the robot steers at the farthest upcoming path cell within this
-  /// distance [m] (0: cell by cell). On tuning seed 101 (office, 200 s, keeping clear of
-  /// blocked cells) 0.2 m covered 50 % against 44 % cell by cell.
+  /// Pure-pursuit look-ahead [m]: the robot steers at the farthest upcoming path cell within it
+  /// (0: cell by cell). docs/ebslam_core.md#exploration
   double lookahead_m = 0.2;
   double turn_in_place_rad = 0.8;
   double heading_gain = 2.5;

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "ebslam/integration.h"
+#include "ebslam/exponential_decay.h"
 
 namespace ebslam {
 

@@ -1,4 +1,4 @@
-#include "ebslam/integration.h"
+#include "ebslam/exponential_decay.h"
 
 #include <cmath>
 #include <random>
@@ -12,7 +12,7 @@ namespace {
 
 // Proposition 3: the recursion of eq. 6.19/6.20 equals the weighted mean of eq. 6.14 with
 // exponential weights, for irregular event times.
-TEST(Integration, RecursionEqualsClosedFormForIrregularTimes) {
+TEST(ExponentialDecay, RecursionEqualsClosedFormForIrregularTimes) {
   std::mt19937_64 rng(7);
   std::exponential_distribution<double> gap(2000.0);  // mean 0.5 ms between events
   std::uniform_real_distribution<double> value(-1.0, 3.0);
@@ -39,7 +39,7 @@ TEST(Integration, RecursionEqualsClosedFormForIrregularTimes) {
 
 // Special cases of 6.3.1: simultaneous events give the running mean (alpha_n = 1/n), a constant
 // event interval mu = exp(-lambda c) gives alpha_n = (1 - mu) / (1 - mu^n).
-TEST(Integration, SpecialCasesOfSection631) {
+TEST(ExponentialDecay, SpecialCasesOfSection631) {
   ExponentialDecayIntegrator same_time(100.0);
   double sum = 0.0;
   for (int n = 1; n <= 50; ++n) {
@@ -59,7 +59,7 @@ TEST(Integration, SpecialCasesOfSection631) {
   EXPECT_NEAR(regular.alpha(), 1.0 - mu, 1e-12);  // eq. 6.26
 }
 
-TEST(Integration, DecayFromInfluenceMatchesThesisExample) {
+TEST(ExponentialDecay, DecayFromInfluenceMatchesThesisExample) {
   // 6.3.2: beta = 0.95, G0 = 250 gives alpha ~ 0.012; the last G0 events carry weight beta.
   const double alpha = decayFromInfluence(0.95, 250.0);
   EXPECT_NEAR(alpha, 0.012, 0.0005);
@@ -72,7 +72,7 @@ TEST(Integration, DecayFromInfluenceMatchesThesisExample) {
 
 // eq. 6.30 equals B single-event updates of eq. 6.29 when the B partial scores are equal, and
 // the scaled representation equals the direct update.
-TEST(Integration, BatchAndScaledScoresEqualDirectUpdates) {
+TEST(ExponentialDecay, BatchAndScaledScoresEqualDirectUpdates) {
   const double alpha = decayFromInfluence(0.95, 40.0);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> value(0.0, 1.0);
@@ -97,7 +97,7 @@ TEST(Integration, BatchAndScaledScoresEqualDirectUpdates) {
   }
 }
 
-TEST(Integration, RejectsBadInput) {
+TEST(ExponentialDecay, RejectsBadInput) {
   EXPECT_THROW(ExponentialDecayIntegrator(-1.0), std::invalid_argument);
   ExponentialDecayIntegrator integrator(1.0);
   integrator.add(1.0, 0.5);

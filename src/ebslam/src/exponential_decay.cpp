@@ -1,4 +1,4 @@
-#include "ebslam/integration.h"
+#include "ebslam/exponential_decay.h"
 
 #include <cmath>
 #include <stdexcept>
