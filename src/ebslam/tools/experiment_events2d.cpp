@@ -14,8 +14,8 @@
 //   noise_runs.csv         the columns of runs.csv plus noise_rate, variant
 //   denoise.csv            signal kept / noise removed of the filter against the labels per
 //                          trajectory, rate and support window
-// docs/results/events2d.md is generated from it by scripts/events2d_report.py; the whole
-// pipeline is scripts/events2d_experiment.sh.
+// docs/results/events2d.md is generated from it by scripts/results/events2d_report.py; the whole
+// pipeline is scripts/results/events2d_experiment.sh.
 
 #include <CLI/CLI.hpp>
 

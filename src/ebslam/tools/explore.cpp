@@ -2,8 +2,8 @@
 // gain planner (and optionally the random bump-and-turn baseline) on floor plans and seeds, e.g.
 //   ebslam_explore src/ebslam/floor_plans/*.txt --seeds 1 2 3 4 5 --baseline --output out/
 // Writes per run <layout>_<method>_s<seed>_{series.csv,gt.tum,est.tum,hex.csv,bumps.csv,
-// covered.png} and one line per run to summary.csv (scripts/exploration_report.py plots them).
-// Exit status: 0 success, 1 usage / input error.
+// covered.png} and one line per run to summary.csv (scripts/results/exploration_report.py plots
+// them). Exit status: 0 success, 1 usage / input error.
 
 #include <algorithm>
 #include <cmath>
