@@ -1,6 +1,7 @@
 // dasp_evaluate: runs superpixel methods over a folder of RGB-D frames with object labels (the
 // layout of ../shared/data/osd/learn) for several K and writes per-frame and mean metrics as CSV
-// and JSON. Mask per frame: object label > 0 and depth > 0. Plots: scripts/results/make_dasp_results.py.
+// and JSON. Mask per frame: object label > 0 and depth > 0. Plots:
+// scripts/results/make_dasp_results.py.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
