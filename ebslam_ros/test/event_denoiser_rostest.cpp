@@ -40,7 +40,6 @@ ebslam::BackgroundActivityFilterConfig nodeConfig() {
 // State shared by the tests of one run (they run in order against one node).
 struct Stream {
   std::int64_t next_t = kT0;
-  std::uint32_t next_seq = 0;
   ebslam::BackgroundActivityFilter reference{nodeConfig(), {kSize, kSize}};
   std::uint64_t passed = 0, rejected = 0, outside = 0;
   std::mt19937 rng{7};
@@ -81,7 +80,6 @@ class EventDenoiserTest : public ::testing::Test {
   ebslam_msgs::EventArray sweep(std::uint32_t column, std::int64_t t_us) {
     ebslam_msgs::EventArray msg;
     msg.header.frame_id = "edvs_optical_frame";
-    msg.header.seq = stream().next_seq++;
     msg.width = msg.height = kSize;
     for (std::uint32_t y = 0; y < kSize; ++y) {
       ebslam_msgs::Event e;
