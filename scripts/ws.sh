@@ -78,6 +78,10 @@ run_tests() {
                             [ -e "${dir}/CATKIN_IGNORE" ] && continue
                             echo "$(sed -n 's:.*<name>\(.*\)</name>.*:\1:p' "${xml}" | head -n1) ${dir#"${repo}"/}"
                           done)
+  # Checks of the workspace as a whole: package.xml completeness (scripts/check_package_deps.py).
+  echo "=== workspace checks"
+  /usr/bin/python3 "${repo}/scripts/tests/workspace_checks.py" "${results}/workspace_checks.xml" \
+    </dev/null 2>&1 | tail -n 3 || status=1
   local entry name path
   for entry in "${packages[@]}"; do
     read -r name path <<<"${entry}"
