@@ -136,8 +136,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--lookahead", config.exploration.lookahead_m, "pure-pursuit look-ahead [m]")
       ->capture_default_str();
-  app.add_option("--keep-clear", config.exploration.keep_clear_of_blocked,
-                 "plan around cells next to blocked cells (1/0)")
+  app.add_option("--near-blocked-cost", config.exploration.near_blocked_cost,
+                 "extra path cost of a cell next to a blocked cell [cells]")
+      ->capture_default_str();
+  app.add_option("--max-turn-rate", config.exploration.max_turn_rate_rps,
+                 "explorer's largest commanded turn rate [rad/s]")
       ->capture_default_str();
   app.add_option("--backout-time", config.exploration.backout_time_s, "back-out time [s]")
       ->capture_default_str();

@@ -67,9 +67,22 @@ struct ExplorationConfig {
   /// Best-first search budget: expanded cells and CPU time [s].
   int planner_max_nodes = 3000;
   double planner_time_budget_s = 0.005;
-  /// Plan around the cells next to blocked cells (within about a robot radius of an obstacle)
-  /// when a path exists that way.
-  bool keep_clear_of_blocked = true;
+  /// Extra path cost [cells] of stepping onto a cell next to a blocked cell (its centre lies
+  /// within about a robot radius of an obstacle): paths keep clear of obstacles where that is
+  /// cheap, yet still pass a gap the body fits when the gain beyond it pays for the detour
+  /// (0: no preference). A hard avoidance would trap the robot in a pocket whose mouth is narrow.
+  double near_blocked_cost = 2.0;
+  /// Oscillation: when the last oscillation_window cell changes of the robot visited at most
+  /// oscillation_max_cells distinct cells, it is going round in a loop; it then commits to a
+  /// plan of at least commit_min_cells cells that ends outside the loop and keeps it until
+  /// driven (a bump still backs out and replans, committed). 0 cells: no detection.
+  int oscillation_window = 30;
+  int oscillation_max_cells = 7;
+  int commit_min_cells = 8;
+  /// Path cost [cells] of crossing a blocked cell when a committed plan cannot leave the loop
+  /// otherwise: cone cells are guesses around a contact, so a robot walled in
+  /// by its own cones tries the cheapest way past them (a real obstacle bumps it again).
+  double escape_blocked_cost = 20.0;
   /// Paths shorter than this many cells are taken only if no longer one is found.
   int min_path_cells = 3;
   /// Longest path handed to the controller [cells] (replanned when done).
@@ -122,9 +135,17 @@ class ExplorationPlanner {
   /// Normalises Z and E over the cells reachable from `robot_cell` (eq. 7.8) and computes the
   /// gain (eq. 7.9, 7.10); cells outside Omega get gain 0.
   void computeGain(int robot_cell);
-  /// Best-first search from the robot's cell (computeGain first). Returns the cells of the path
-  /// without the start cell; empty if the robot is outside the grid or no neighbour is open.
+  /// As computeGain, with Omega grown through blocked cells too (blocked cells get gain 0).
+  void computeGain(int robot_cell, bool through_blocked);
+  /// Best-first search from the robot's cell (computeGain first) by gain per path cost (one per
+  /// cell plus near_blocked_cost next to blocked cells). Returns the cells of the path without
+  /// the start cell; empty if the robot is outside the grid or no neighbour is open.
   std::vector<int> plan(const Eigen::Vector2d& position);
+  /// A committed plan out of a loop: at least commit_min_cells cells (or the longest found),
+  /// ending on a cell with loop_cells[cell] == 0; crosses blocked cells at escape_blocked_cost
+  /// if nothing else leaves the loop. Empty if the robot is outside the grid.
+  std::vector<int> planOutOf(const Eigen::Vector2d& position,
+                             const std::vector<std::uint8_t>& loop_cells);
 
   const std::vector<float>& localisationMap() const { return z_; }
   const std::vector<float>& obstacleMap() const { return e_; }
@@ -136,11 +157,20 @@ class ExplorationPlanner {
   bool lastPlanHitTimeBudget() const { return last_hit_time_; }
 
  private:
-  std::vector<int> search(int start_cell, const std::vector<std::uint8_t>& closed_cells);
+  struct SearchGoal {
+    int min_cells = 1;                                   // shorter paths only if nothing else
+    const std::vector<std::uint8_t>* exclude = nullptr;  // cells a path may not end on
+    bool cross_blocked = false;                          // blocked cells at escape_blocked_cost
+  };
+  std::vector<int> search(int start_cell, const SearchGoal& goal);
+  void updateNearBlocked();
 
   ExplorationConfig config_;
   HexGrid grid_;
-  std::vector<std::uint8_t> avoid_;  // scratch: blocked cells and their neighbours
+  std::vector<std::uint8_t> near_blocked_;  // cells next to a blocked cell (not blocked)
+  bool near_blocked_stale_ = true;
+  // Search scratch, kept to avoid allocations per plan.
+  std::vector<std::uint8_t> closed_scratch_;
   std::vector<float> z_, e_, gain_;
   std::vector<std::uint8_t> blocked_;
   std::vector<Eigen::Vector2d> bump_points_;
@@ -186,8 +216,14 @@ class Explorer {
   std::size_t replans() const { return replans_; }
   std::size_t bumps() const { return bumps_; }
   std::size_t poseJumps() const { return pose_jumps_; }
+  /// Loops detected (see ExplorationConfig::oscillation_window) and whether the current plan is
+  /// a committed one out of a loop.
+  std::size_t loopsDetected() const { return loops_; }
+  bool committed() const { return committed_; }
 
  private:
+  /// Records a cell change of the robot; true when the recent cells form a loop.
+  bool recordCell(int cell);
   void replan(double now_s, const Eigen::Vector2d& position, const GridMap2f* normalisation);
   VelocityCommand follow(const Pose2& pose);
 
@@ -209,6 +245,10 @@ class Explorer {
   std::size_t replans_ = 0;
   std::size_t bumps_ = 0;
   std::size_t pose_jumps_ = 0;
+  std::vector<int> recent_cells_;         // the last oscillation_window cell changes
+  std::vector<std::uint8_t> loop_cells_;  // per grid cell: part of the detected loop
+  bool committed_ = false;
+  std::size_t loops_ = 0;
 };
 
 /// The random bump-and-turn baseline: drives straight; after a bump backs out and turns to a
