@@ -117,6 +117,12 @@ void ExplorationConfig::validate() const {
   if (!(std::isfinite(lookahead_m) && lookahead_m >= 0.0)) fail("lookahead_m must be >= 0");
   if (!positive(heading_gain)) fail("heading_gain must be positive");
   if (!positive(max_speed_mps)) fail("max_speed_mps must be positive");
+  if (!(std::isfinite(relocalise_speed_mps) && relocalise_speed_mps >= 0.0)) {
+    fail("relocalise_speed_mps must be >= 0");
+  }
+  if (!(std::isfinite(relocalise_timeout_s) && relocalise_timeout_s >= 0.0)) {
+    fail("relocalise_timeout_s must be >= 0");
+  }
   if (!positive(max_turn_rate_rps)) fail("max_turn_rate_rps must be positive");
   if (!positive(backout_time_s)) fail("backout_time_s must be positive");
   if (!positive(backout_speed_mps)) fail("backout_speed_mps must be positive");
@@ -405,6 +411,8 @@ const char* toString(ExplorationState state) {
       return "no pose";
     case ExplorationState::kStuck:
       return "stuck";
+    case ExplorationState::kRelocalising:
+      return "relocalising";
   }
   return "unknown";
 }
@@ -418,6 +426,26 @@ std::vector<Eigen::Vector2d> Explorer::pathPoints() const {
     points.push_back(planner_.grid().centre(path_[i]));
   }
   return points;
+}
+
+void Explorer::setLocalisationLost(bool lost, double now_s) {
+  if (lost == lost_) return;
+  lost_ = lost;
+  if (lost) {
+    lost_since_s_ = now_s;
+    ++relocalisations_;
+    state_ = ExplorationState::kRelocalising;
+    message_ = "localisation lost; driving straight back to re-localise";
+    relocalise_direction_ = -1.0;
+    path_.clear();
+    next_waypoint_ = 0;
+  } else {
+    lost_since_s_ = -1.0;
+    if (state_ == ExplorationState::kRelocalising) state_ = ExplorationState::kExploring;
+    message_ = "localisation back; replanning";
+    recent_cells_.clear();
+  }
+  need_plan_ = true;
 }
 
 bool Explorer::recordCell(int cell) {
@@ -548,6 +576,20 @@ VelocityCommand Explorer::update(double now_s, const std::optional<Pose2>& pose,
     state_ = ExplorationState::kExploring;
     message_ = "pose is back; replanning";
     need_plan_ = true;
+  }
+  if (lost_ && lost_since_s_ >= 0.0 && now_s - lost_since_s_ > config_.relocalise_timeout_s) {
+    lost_since_s_ = -1.0;  // gave up: explore on the pose as it is
+    state_ = ExplorationState::kExploring;
+    message_ = "not re-localised; exploring on";
+    need_plan_ = true;
+  }
+  if (lost_ && lost_since_s_ >= 0.0) {
+    state_ = ExplorationState::kRelocalising;
+    if (bump.contact()) {
+      // Away from the contact, without marking a map cell from a pose not to be trusted.
+      relocalise_direction_ = std::cos(bump.direction_rad) >= 0.0 ? -1.0 : 1.0;
+    }
+    return {relocalise_direction_ * config_.relocalise_speed_mps, 0.0};
   }
   const Eigen::Vector2d position(pose_->x, pose_->y);
   if (planner_.addCoverage(position)) {

@@ -91,6 +91,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
   std::optional<EventSlam2d> slam;
   std::optional<Explorer> explorer;
   std::optional<RandomBumpAndTurn> baseline;
+  std::optional<TrackingMonitor> monitor;
   if (config.random_baseline) {
     baseline.emplace(config.exploration, config.seed);
   } else {
@@ -99,6 +100,8 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
         CeilingCamera(simulator.config().events.camera, simulator.config().ceiling_height_m),
         start);
     explorer.emplace(config.exploration, Eigen::Vector2d(start.x, start.y));
+    monitor.emplace(config.tracking, CeilingCamera(simulator.config().events.camera,
+                                                   simulator.config().ceiling_height_m));
   }
   CoverageRaster coverage(plan, simulator.config().robot.radius_m, config.coverage_resolution_m);
 
@@ -120,6 +123,10 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       sample.t_s = t;
       sample.covered = coverage.coveredFraction();
       sample.bumps = result.bump_events;
+      if (monitor) {
+        sample.contrast = monitor->contrast();
+        sample.lost = monitor->state() == TrackingState::kLost;
+      }
       if (slam) {
         sample.position_error_m =
             std::hypot(estimate.x - simulator.pose().x(), estimate.y - simulator.pose().y());
@@ -156,6 +163,10 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       slam->process(events);
       const Pose2 p = slam->estimate();
       result.estimate.push_back(se2ToFloorPose(simulator.time(), p.x, p.y, p.theta));
+      const TrackingState tracking = monitor->update(simulator.time(), events, p, slam->map());
+      if (config.relocalise_when_lost) {
+        explorer->setLocalisationLost(tracking == TrackingState::kLost, simulator.time());
+      }
     }
     if (bump.contact() && !was_contact) ++result.bump_events;
     was_contact = bump.contact();
@@ -174,6 +185,8 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
     result.bump_points = planner.bumpPoints();
     result.last_path = explorer->pathPoints();
     result.slam_map = mapToImage(slam->map());
+    result.collapses = monitor->collapses();
+    result.relocalisations = explorer->relocalisations();
   }
   result.covered = coverage.covered().clone();
   result.reachable = coverage.reachable().clone();

@@ -290,6 +290,40 @@ TEST(Explorer, DetectsALoopOfRevisitedCellsAndCommitsToAPlanOutOfIt) {
   EXPECT_EQ(straight.loopsDetected(), 0u);
 }
 
+TEST(Explorer, ReversesStraightWithoutMappingWhileTheLocalisationIsLost) {
+  ExplorationConfig config = smallGrid();
+  Explorer explorer(config, {0.0, 0.0});
+  const BumpReading none;
+  explorer.update(0.0, Pose2{}, none, nullptr);
+  explorer.setLocalisationLost(true, 0.05);
+  const std::vector<float> e_before = explorer.planner().obstacleMap();
+  VelocityCommand command = explorer.update(0.1, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kRelocalising);
+  EXPECT_EQ(command.v_mps, -config.relocalise_speed_mps);
+  EXPECT_EQ(command.omega_rps, 0.0);
+  EXPECT_EQ(explorer.planner().obstacleMap(), e_before) << "no coverage from a lost pose";
+  BumpReading rear;
+  rear.segments = 1u << 4;
+  rear.direction_rad = kPi;
+  command = explorer.update(0.15, Pose2{0.5, 0.5, 0.0}, rear, nullptr);
+  EXPECT_EQ(command.v_mps, config.relocalise_speed_mps) << "forwards after a contact behind";
+  EXPECT_EQ(explorer.bumps(), 0u) << "no blocked cells from a lost pose";
+  EXPECT_EQ(explorer.relocalisations(), 1u);
+  // Tracking is back: a new plan from the trusted pose.
+  const std::size_t replans = explorer.replans();
+  explorer.setLocalisationLost(false, 0.2);
+  command = explorer.update(0.25, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kExploring);
+  EXPECT_GT(explorer.replans(), replans);
+  // Lost for longer than relocalise_timeout_s: explores on regardless.
+  explorer.setLocalisationLost(true, 1.0);
+  explorer.update(1.0 + 0.5 * config.relocalise_timeout_s, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kRelocalising);
+  explorer.update(1.1 + config.relocalise_timeout_s, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kExploring);
+  EXPECT_NE(explorer.message().find("not re-localised"), std::string::npos);
+}
+
 TEST(Explorer, StopsAndSaysSoWithoutAPose) {
   Explorer explorer(smallGrid(), {0.0, 0.0});
   const BumpReading none;

@@ -102,6 +102,12 @@ struct ExplorationConfig {
   double backout_speed_mps = 0.1;
   /// Bumps in a row (each before the robot has left its cell) after which the robot is stuck.
   int max_bumps_in_a_row = 6;
+  /// While EB-SLAM is lost: reverse straight at this speed [m/s] (forwards after a contact
+  /// behind), no turning: in the simulated rooms turning in place while lost let the error
+  /// grow to metres, driving straight let EB-SLAM re-localise; give up after
+  /// relocalise_timeout_s [s] and explore on.
+  double relocalise_speed_mps = 0.1;
+  double relocalise_timeout_s = 20.0;
   /// No pose for this long [s]: stop and report it.
   double pose_timeout_s = 0.5;
   /// A pose farther than max_speed * dt + pose_jump_m [m] (or a turn beyond max_turn_rate * dt
@@ -191,6 +197,9 @@ enum class ExplorationState {
   kBackingOut,  ///< moving away from a contact
   kNoPose,      ///< no pose for pose_timeout_s: stopped
   kStuck,       ///< bumped on every side, too many bumps in a row, or no path: stopped
+  /// EB-SLAM lost track (setLocalisationLost): driving slowly straight back the way it came, over
+  /// ceiling just mapped, without turning; the maps are not updated from the untrusted pose.
+  kRelocalising,
 };
 const char* toString(ExplorationState state);
 
@@ -205,6 +214,11 @@ class Explorer {
   /// velocity command. Non-finite poses count as no pose.
   VelocityCommand update(double now_s, const std::optional<Pose2>& pose, const BumpReading& bump,
                          const GridMap2f* normalisation);
+
+  /// The localisation's verdict (e.g. TrackingMonitor, ebslam2d_tracking.h) at time now_s [s]:
+  /// while lost, update() turns in place (kRelocalising) and leaves the maps alone; when tracking
+  /// returns it replans.
+  void setLocalisationLost(bool lost, double now_s);
 
   ExplorationState state() const { return state_; }
   /// Why the robot is in its state (empty while exploring normally); for logs.
@@ -249,6 +263,14 @@ class Explorer {
   std::vector<std::uint8_t> loop_cells_;  // per grid cell: part of the detected loop
   bool committed_ = false;
   std::size_t loops_ = 0;
+  bool lost_ = false;
+  double lost_since_s_ = -1.0;
+  double relocalise_direction_ = -1.0;  // -1 reversing, +1 forwards
+  std::size_t relocalisations_ = 0;
+
+ public:
+  /// Times the explorer stopped to re-localise.
+  std::size_t relocalisations() const { return relocalisations_; }
 };
 
 /// The random bump-and-turn baseline: drives straight; after a bump backs out and turns to a
