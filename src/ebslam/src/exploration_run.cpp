@@ -93,7 +93,10 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
   std::optional<RandomBumpAndTurn> baseline;
   std::optional<TrackingMonitor> monitor;
   if (config.random_baseline) {
-    baseline.emplace(config.exploration, config.seed);
+    // The baseline needs no localisation: it turns at the robot's full rate.
+    ExplorationConfig random_config = config.exploration;
+    random_config.max_turn_rate_rps = sim_config.robot.max_turn_rate_rps;
+    baseline.emplace(random_config, config.seed);
   } else {
     slam.emplace(
         slam_config,
