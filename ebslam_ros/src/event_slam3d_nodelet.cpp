@@ -263,10 +263,10 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       zero_time_ += input.zero_time;
       ++bad_input_seen_;
       if (zero_time_log_.due()) {
-        NODELET_ERROR("dropped %zu depth events stamped 0 (unset event time) (%llu messages with "
-                      "them since the previous such message not logged)",
-                      input.zero_time,
-                      static_cast<unsigned long long>(zero_time_log_.suppressed()));
+        NODELET_ERROR(
+            "dropped %zu depth events stamped 0 (unset event time) (%llu messages with "
+            "them since the previous such message not logged)",
+            input.zero_time, static_cast<unsigned long long>(zero_time_log_.suppressed()));
       }
     }
     if (input.no_depth > 0) {
