@@ -201,7 +201,7 @@ struct EventSimulatorNodeConfig {
   /// start pose (planar: x, y, yaw), so an estimator whose map is this frame and which starts at
   /// its origin (initial_pose 0 0 0) draws its path over the ground truth's. "" = none.
   std::string align_frame;
-  int path_length = 10000;                          ///< ~path_length
+  int path_length = 10000;  ///< ~path_length
 };
 /// The parameters a scenario file may hold.
 extern const std::vector<std::string> kScenarioKeys;
