@@ -66,6 +66,7 @@ class DaspNodelet : public nodelet::Nodelet {
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("superpixels/cloud", 1);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<DaspNodeletConfig>>(pnh);
+    ebslam_msgs::markReconfigureParamsRead<DaspNodeletConfig>(pnh);
     reconfigure_->setCallback(
         [this](DaspNodeletConfig& c, uint32_t level) { onReconfigure(c, level); });
 

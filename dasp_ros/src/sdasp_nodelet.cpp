@@ -65,6 +65,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     ucm_pub_ = transport.advertise("segments/ucm", 1);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SdaspNodeletConfig>>(pnh);
+    ebslam_msgs::markReconfigureParamsRead<SdaspNodeletConfig>(pnh);
     reconfigure_->setCallback([this](SdaspNodeletConfig& c, uint32_t) {
       std::lock_guard<std::mutex> lock(mutex_);
       dasp::SdaspConfig next = config_.sdasp;

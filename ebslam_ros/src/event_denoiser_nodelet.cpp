@@ -50,6 +50,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventDenoiserKnobsConfig>>(
         reconfigure_mutex_, getPrivateNodeHandle());
+    ebslam_msgs::markReconfigureParamsRead<EventDenoiserKnobsConfig>(getPrivateNodeHandle());
     EventDenoiserKnobsConfig start;
     start.window = 1e-6 * static_cast<double>(config_.filter.window_us);
     start.min_support = config_.filter.min_support;

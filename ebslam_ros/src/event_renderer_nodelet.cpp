@@ -65,7 +65,11 @@ class EventRendererNodelet : public nodelet::Nodelet {
     const ros::Time newest = msg->events.back().ts;
     if (!events_.empty() && newest < events_.back().ts) events_.clear();  // time jumped back
     for (const ebslam_msgs::Event& e : msg->events) events_.push_back(e);
-    const ros::Time oldest = newest - ros::Duration(config_.accumulation_time_s);
+    // Clamped at time 0: ros::Time throws below it (events stamped near 0, e.g. sim time with
+    // no /clock yet).
+    const ros::Time oldest = newest.toSec() > config_.accumulation_time_s
+                                 ? newest - ros::Duration(config_.accumulation_time_s)
+                                 : ros::Time(0, 0);
     while (!events_.empty() && events_.front().ts < oldest) events_.pop_front();
   }
 

@@ -197,6 +197,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
 
       reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventSlam3dKnobsConfig>>(
           reconfigure_mutex_, pnh);
+      ebslam_msgs::markReconfigureParamsRead<EventSlam3dKnobsConfig>(pnh);
       EventSlam3dKnobsConfig start;
       start.num_particles = config_.slam.num_particles;
       start.batch_size = config_.slam.batch_size;

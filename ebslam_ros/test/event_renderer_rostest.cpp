@@ -78,6 +78,34 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
   EXPECT_EQ(pixel(images.back(), 10, 10)[1], 0);
 }
 
+// Events stamped within the window of time 0 (sim time before the first /clock): the window's
+// start would be negative, which ros::Time cannot hold; the image is still drawn.
+TEST(EventRenderer, EventsNearTimeZeroAreDrawn) {
+  ros::NodeHandle nh;
+  ros::Publisher events = nh.advertise<ebslam_msgs::EventArray>("events", 10);
+  std::vector<sensor_msgs::Image> images;
+  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>(
+      "event_image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
+  ros::WallDuration(0.3).sleep();
+  ebslam_msgs::EventArray msg;
+  msg.header.frame_id = "edvs_optical_frame";
+  msg.width = 128;
+  msg.height = 64;
+  const ros::Time early(0, 1000);  // 1 us
+  msg.events = {event(early, 7, 8, true)};
+  msg.header.stamp = early;
+  events.publish(msg);
+  const auto drawn = [&] {
+    for (const auto& image : images) {
+      if (image.header.stamp == early && pixel(image, 7, 8)[0] == 255) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(ebslam_ros_test::spinUntil(drawn, 5.0)) << "no image of the events near time 0";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -479,7 +479,7 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   EXPECT_FALSE(save.response.success);
 }
 
-// A map that does not exist or is not an image: the nodelet says why and does not start; the
+// A map that does not exist or is not an image: the nodelet says why and refuses to load; the
 // manager process lives on. The test loads the two nodelets itself (the manager's load_nodelet
 // service), after subscribing to /rosout, so that it sees their error messages: a test that
 // only found the topics missing would pass with nodelets that never loaded.
@@ -505,8 +505,10 @@ TEST(BadMap, NodeRefusesToStartAndLivesOn) {
     load.request.type = "ebslam_ros/EventParticleFilter";
     load.request.remap_source_args = {"/" + name + "/pose"};
     load.request.remap_target_args = {"/" + name + "/pose"};
-    // The manager answers once onInit has returned (whatever it returned).
-    ASSERT_TRUE(ros::service::call("/bad_map_manager/load_nodelet", load));
+    // The manager answers once onInit has returned: false, as a filter that cannot start
+    // refuses to load (the startup policy of ros_param_helpers.h).
+    EXPECT_FALSE(ros::service::call("/bad_map_manager/load_nodelet", load))
+        << "the filter loaded with a bad map";
     // Its reason, naming the map, at ERROR or FATAL from the manager's process.
     const auto reported = [&] {
       for (const auto& m : logs) {
@@ -523,9 +525,13 @@ TEST(BadMap, NodeRefusesToStartAndLivesOn) {
     ASSERT_TRUE(ros::master::getTopics(topics));
     for (const auto& topic : topics) EXPECT_NE(topic.name, "/" + name + "/pose");
   }
-  // The manager lives on and answers.
+  // The manager lives on and answers, without the refused nodelets.
   nodelet::NodeletList list;
   EXPECT_TRUE(ros::service::call("/bad_map_manager/list", list));
+  for (const std::string& loaded : list.response.nodelets) {
+    EXPECT_NE(loaded, "/missing");
+    EXPECT_NE(loaded, "/bad_format");
+  }
 }
 
 }  // namespace

@@ -105,6 +105,7 @@ void EdvsDriverNodelet::onInit() {
 
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<EdvsConfig>>(reconfigure_mutex_, pnh);
+  ebslam_msgs::markReconfigureParamsRead<EdvsConfig>(pnh);
   reconfigure_server_->setCallback(
       [this](EdvsConfig& c, std::uint32_t level) { reconfigure(c, level); });
 

@@ -12,6 +12,7 @@ multi_machine.launch needs ssh to a robot: it is resolved (`roslaunch --nodes`) 
 Usage: install_space_test.py WS_DIR [JUNIT_XML]   (exit 1 on a failure)
 """
 import os
+import re
 import shutil
 import signal
 import socket
@@ -224,6 +225,8 @@ def main():
     if junit:
         suite = ET.Element("testsuite", name="install_space", tests=str(len(results)))
         for name, ok, detail in results:
+            # Logs carry terminal colour codes: control characters XML cannot hold.
+            detail = re.sub(r"[\x00-\x08\x0b\x0c\x0e-\x1f]", "", detail)
             case = ET.SubElement(suite, "testcase", classname="InstallSpace", name=name)
             if not ok:
                 ET.SubElement(case, "failure", message=detail.splitlines()[0][:300] if detail else

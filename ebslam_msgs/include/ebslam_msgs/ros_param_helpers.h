@@ -149,6 +149,15 @@ inline void requirePositive(double value, const ros::NodeHandle& nh, const std::
   }
 }
 
+/// Marks the knobs of a dynamic_reconfigure Config type as read below `nh`: its Server reads them
+/// at construction and writes them back, so they stay on the master for the node's next start.
+template <typename ReconfigureConfig>
+void markReconfigureParamsRead(const ros::NodeHandle& nh) {
+  for (const auto& description : ReconfigureConfig::__getParamDescriptions__()) {
+    markParamRead(nh, description->name);
+  }
+}
+
 /// Names of the parameters set below `nh`'s namespace (fully resolved).
 inline std::vector<std::string> paramsBelow(const ros::NodeHandle& nh) {
   std::vector<std::string> all, below;
