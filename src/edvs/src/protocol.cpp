@@ -903,7 +903,12 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
     const std::int64_t host = staged_.back().host_us - staged_.front().host_us;
     backlog = device > host + host / 4 + 4000;
   }
-  resolveGap(out, false, true, 0, !backlog);
+  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
+      *idle_host_us_ - staged_.front().host_us >= config_.max_gap_hold_us) {
+    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
+  } else {
+    resolveGap(out, false, true, 0, !backlog);
+  }
   return out.size() - before;
 }
 

@@ -121,7 +121,7 @@ struct ParserConfig {
   std::int64_t live_window_us = 10000;
   /// ...and the liveliest of them is at most this much later than the latency floor, beyond
   /// whole periods [us] (the jitter of a live event's latency).
-  std::int64_t live_lag_us = 8000;
+  std::int64_t live_lag_us = 16000;
   /// ...or until they span this much host time: then the evidence there is decides [us].
   std::int64_t max_gap_hold_us = 1000000;
   /// Absolute-timestamp formats (E2..E4): an unconfirmed stream (no event published yet, or
@@ -257,7 +257,10 @@ class EventParser {
   /// Bytes of an incomplete event held back, waiting for the next feed().
   std::size_t pendingBytes() const;
   /// Tells the parser that a read returned no bytes (the line was idle); see TimestampUnwrapper.
-  void noteIdle() {
+  /// host_us: host time of the idle read, if known (lets flush() end a gap judgement that has
+  /// waited max_gap_hold_us).
+  void noteIdle(std::optional<std::int64_t> host_us = std::nullopt) {
+    if (host_us) idle_host_us_ = *host_us;
     if (!config_.infer_wraps_from_host_time) return;
     unwrapper_.noteIdle();
     ++idle_epoch_;
@@ -361,7 +364,8 @@ class EventParser {
   std::int64_t gap_latency_us_ = 0;
   std::int64_t gap_candidate_k_ = -1;  // periods a first live check found, to be confirmed
   std::int64_t gap_candidate_host_ = 0;
-  bool gap_candidate_idle_ = false;  // latency of a live event when the gap began
+  std::optional<std::int64_t> idle_host_us_;  // host time of the last idle read, if given
+  bool gap_candidate_idle_ = false;           // latency of a live event when the gap began
   std::uint32_t idle_epoch_ = 0;
   std::int64_t previous_read_host_ = kNoHost;
   bool mode_decided_ = false;  // set by the first bytes fed
