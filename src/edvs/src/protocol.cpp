@@ -885,6 +885,10 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
   // arrived, so the newest event is live and the gap can be judged; unless the newest events
   // were still a backlog (the device clock ran faster than the host clock over them), in which
   // case the line only hiccuped in the middle of the backlog.
+  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
+      *idle_host_us_ - staged_.front().host_us >= config_.max_gap_hold_us) {
+    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
+  }
   if (judging_gap_ && !staged_.empty()) {
     const Staged& newest = staged_.back();
     const Staged& m = staged_[live_from_].host_us <= newest.host_us - config_.live_window_us
@@ -903,12 +907,7 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
     const std::int64_t host = staged_.back().host_us - staged_.front().host_us;
     backlog = device > host + host / 4 + 4000;
   }
-  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
-      *idle_host_us_ - staged_.front().host_us >= config_.max_gap_hold_us) {
-    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
-  } else {
-    resolveGap(out, false, true, 0, !backlog);
-  }
+  resolveGap(out, false, true, 0, !backlog);
   return out.size() - before;
 }
 
