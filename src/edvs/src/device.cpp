@@ -308,7 +308,7 @@ std::size_t EdvsDevice::read(ebslam::EventVector& out, int timeout_ms) {
   }
   if (n == 0) {
     // The line is idle: no further bytes will confirm the events held back; decide them now.
-    parser_.noteIdle();
+    parser_.noteIdle(monotonicMicros());
     return parser_.flush(out);
   }
   stats_.bytes_read += n;

@@ -410,11 +410,102 @@ EventParser::Link EventParser::linkFromLast(std::size_t pos) const {
 
 void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
                                ebslam::EventVector& out) {
-  const FrameRef f = frameAt(pos);
+  publishDecoded(held_[pos], held_[pos + 1], frameAt(pos), step, first, trusted, out);
+}
+
+EventParser::FrameRef EventParser::frameFromBytes(const std::size_t* index) const {
+  const std::size_t size = static_cast<std::size_t>(minEventBytes(config_.format));
+  FrameRef f;
+  std::uint64_t raw = 0;
+  for (std::size_t k = 2; k < size; ++k) raw = (raw << 8) | held_[index[k]];
+  f.raw = static_cast<std::int64_t>(raw);
+  f.host_us = held_host_[index[size - 1]];
+  f.arrived_after_us = held_after_[index[0]];
+  f.idle_epoch = held_idle_[index[size - 1]];
+  return f;
+}
+
+EventParser::Link EventParser::linkFromLastRef(const FrameRef& f) const {
+  Link l = link(last_, f);
+  if (l.ok && f.host_us != kNoHost && have_latency_) {
+    l.ok = last_time_us_ + l.step_us <= f.host_us - min_latency_us_ + config_.lead_tolerance_us;
+  }
+  return l;
+}
+
+bool EventParser::between(const FrameRef& f, const FrameRef& next) const {
+  // f lies on the arc from the last published event to `next` (its chain successor): the two
+  // steps add up to the direct one, without an extra wrap.
+  const std::int64_t period = wrapPeriodUs(config_.format);
+  auto fwd = [period](std::int64_t a, std::int64_t b) {
+    const std::int64_t d = b - a;
+    return d < 0 ? d + period : d;
+  };
+  return fwd(last_.raw, f.raw) + fwd(f.raw, next.raw) == fwd(last_.raw, next.raw);
+}
+
+int EventParser::decideRegion(std::size_t pos, std::size_t best, std::size_t next,
+                              Repair& repair) const {
+  // The bytes from pos to the candidate's end, and the candidate followed by one stray byte
+  // before its confirmed successor at `next`, are read every way they can hold one event: a
+  // frame at any offset up to the candidate; with exactly one byte too many, also the frame
+  // with any one of its inner bytes removed (a garbage byte that landed inside the event).
+  // Readings whose time lies between the last published event and the successor are
+  // explanations. One: publish it. Several that differ: the garbage may sit inside the event,
+  // so publishing any could invent one; none is published.
+  const std::size_t frame = static_cast<std::size_t>(minEventBytes(config_.format));
+  const FrameRef& successor = frames_[next];
+  int found = 0;
+  auto consider = [&](const std::size_t* index, std::size_t end) {
+    if ((held_[index[0]] & 0x80) == 0) return;
+    ebslam::Event e;
+    e.y = static_cast<std::uint16_t>(held_[index[0]] & 0x7F);
+    e.x = static_cast<std::uint16_t>(held_[index[1]] & 0x7F);
+    if (!config_.sensor.contains(e)) return;
+    const FrameRef f = frameFromBytes(index);
+    if (!between(f, successor)) return;
+    const Link l = linkFromLastRef(f);
+    if (!l.ok) return;
+    if (found > 0 && held_[index[0]] == held_[repair.index[0]] &&
+        held_[index[1]] == held_[repair.index[1]] && f.raw == repair.frame.raw) {
+      return;  // the same reading
+    }
+    ++found;
+    if (found == 1) {
+      std::copy(index, index + frame, repair.index);
+      repair.frame = f;
+      repair.link = l;
+      repair.end = end;
+    }
+  };
+  std::size_t index[8];
+  for (std::size_t start = pos; start <= best; ++start) {
+    for (std::size_t k = 0; k < frame; ++k) index[k] = start + k;
+    consider(index, start + frame);
+    if (found > 1) return found;
+  }
+  auto splices = [&](std::size_t from) {
+    for (std::size_t drop = 1; drop < frame && found <= 1; ++drop) {
+      std::size_t j = 0;
+      for (std::size_t k = 0; k <= frame; ++k) {
+        if (k != drop) index[j++] = from + k;
+      }
+      consider(index, from + frame + 1);
+    }
+  };
+  if (best + frame - pos == frame + 1) splices(pos);
+  if (found > 1) return found;
+  if (next - best == frame + 1) splices(best);
+  return found;
+}
+
+void EventParser::publishDecoded(std::uint8_t y_byte, std::uint8_t x_byte, const FrameRef& f,
+                                 const Link& step, bool first, bool trusted,
+                                 ebslam::EventVector& out) {
   ebslam::Event e;
-  e.y = static_cast<std::uint16_t>(held_[pos] & 0x7F);
-  e.x = static_cast<std::uint16_t>(held_[pos + 1] & 0x7F);
-  e.polarity = ((held_[pos + 1] >> 7) & 1) == config_.on_bit;
+  e.y = static_cast<std::uint16_t>(y_byte & 0x7F);
+  e.x = static_cast<std::uint16_t>(x_byte & 0x7F);
+  e.polarity = ((x_byte >> 7) & 1) == config_.on_bit;
   const std::int64_t period = wrapPeriodUs(config_.format);
   if (!first && !judging_gap_ && config_.infer_wraps_from_host_time &&
       f.idle_epoch != last_.idle_epoch && f.host_us != kNoHost && last_.host_us != kNoHost &&
@@ -424,6 +515,7 @@ void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bo
     judging_gap_ = true;
     live_from_ = 0;
     gap_residual_known_ = false;
+    gap_candidate_k_ = -1;
     // Latency of a live event: the floor, or before one is known the last event's (an upper
     // bound: fewer periods are then inferred, never more).
     gap_latency_us_ = have_latency_ ? min_latency_us_ : last_.host_us - last_time_us_;
@@ -480,19 +572,23 @@ void EventParser::stageOrEmit(const ebslam::Event& e, std::int64_t host_us,
   if (m.host_us != kNoHost && m.host_us <= host_us - window) {
     const std::int64_t device = e.t_us - m.event.t_us;
     const std::int64_t host = host_us - m.host_us;
-    // The lower bound: a writer or line that hiccups in the middle of a backlog delivers
-    // nothing for a while, which is not live either.
-    if (device <= host + host / 4 + 2000 && device >= host / 2 - 2000 && resolveGap(out, false)) {
+    // Live: the device clock advanced as fast as the host clock over the window, within the
+    // jitter of reads. A backlog advances it faster (the line rate over the event rate); a
+    // writer or line that hiccups, or that is starved, in the middle of one, slower.
+    const std::int64_t jitter = 2000 + host / 8;
+    if (device <= host + jitter && device >= host - jitter &&
+        resolveGap(out, false, false, host_us, false)) {
       return;
     }
   }
   if (staged_.front().host_us != kNoHost &&
       host_us - staged_.front().host_us >= config_.max_gap_hold_us) {
-    resolveGap(out, true);
+    resolveGap(out, true, false, host_us, false);
   }
 }
 
-bool EventParser::resolveGap(ebslam::EventVector& out, bool force) {
+bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,
+                             bool at_once) {
   if (!judging_gap_) return true;
   const std::int64_t period = wrapPeriodUs(config_.format);
   // The least residual belongs to the liveliest event: k periods plus its latency above the
@@ -504,8 +600,27 @@ bool EventParser::resolveGap(ebslam::EventVector& out, bool force) {
     k = x > 0 ? x / period : 0;
     // A live event is late by its latency jitter only; more means the newest events are still
     // a backlog that only looked live (a writer that hiccuped): wait for better evidence.
-    if (!force && gap_residual_us_ - k * period > config_.live_lag_us) return false;
+    if (!force && gap_residual_us_ - k * period > config_.live_lag_us) {
+      gap_candidate_k_ = -1;
+      return false;
+    }
   }
+  if (!force) {
+    // The same count twice: from two idle reads in a row, or from live checks at least
+    // live_window_us apart (a backlog only looks live by chance now and then, and then
+    // rarely with the same count).
+    const bool confirmed =
+        (idle && at_once) ||
+        (gap_candidate_k_ == k &&
+         (idle || gap_candidate_idle_ || now_us - gap_candidate_host_ >= config_.live_window_us));
+    if (!confirmed) {
+      if (gap_candidate_k_ != k) gap_candidate_host_ = now_us;
+      gap_candidate_k_ = k;
+      gap_candidate_idle_ = idle;
+      return false;
+    }
+  }
+  gap_candidate_k_ = -1;
   const std::int64_t add = k * period;
   for (const Staged& s : staged_) {
     ebslam::Event e = s.event;
@@ -534,6 +649,7 @@ void EventParser::buildChains() {
   chain_open_.assign(n, 0);
   chain_advance_.assign(n, 0);
   chain_end_host_.assign(n, kNoHost);
+  chain_next_.assign(n, n);
   const auto frame_score = static_cast<std::int64_t>(frame);
   // Each complete frame decoded once.
   frames_.resize(n);
@@ -551,6 +667,7 @@ void EventParser::buildChains() {
     bool best_open = p + frame + gap + frame > n;  // no successor yet, but one may still come
     std::int64_t best_advance = 0;
     std::int64_t best_end_host = a.host_us;
+    std::size_t best_next = n;
     // A backlog read (the line stalled, or the reader was descheduled) holds device time that
     // its read times do not show: a frame as far behind the host clock as the stream says may
     // be followed by that much more device time (less host time) within one read.
@@ -579,12 +696,14 @@ void EventParser::buildChains() {
       best_open = chain_open_[q] != 0;
       best_advance = advance;
       best_end_host = chain_end_host_[q];
+      best_next = q;
     }
     chain_length_[p] = 1 + best_length;
     chain_score_[p] = best_score;
     chain_open_[p] = best_open ? 1 : 0;
     chain_advance_[p] = best_advance;
     chain_end_host_[p] = best_end_host;
+    chain_next_[p] = best_next;
   }
 }
 
@@ -702,7 +821,29 @@ void EventParser::decideAbsolute(bool flushing, ebslam::EventVector& out) {
         best = n;
       }
     }
-    if (best == n && c.unlinked != n) {
+    if (best != n && have_last_) {
+      const std::size_t next = chain_next_[best];
+      if (next != n) {
+        Repair repair;
+        const int found = decideRegion(pos, best, next, repair);
+        if (found == 1) {
+          const std::size_t extra = repair.end - pos - frame;
+          if (extra > 0) {
+            stats_.bytes_dropped += extra;
+            if (!in_garbage_) ++stats_.resyncs;
+          }
+          publishDecoded(held_[repair.index[0]], held_[repair.index[1]], repair.frame, repair.link,
+                         false, chain_length_[best] >= 2 * confirm, out);
+          pos = repair.end;
+        } else {
+          countSkipped(pos, best + frame);
+          in_garbage_ = true;
+          pos = best + frame;
+        }
+        continue;
+      }
+    }
+    if (best == n && c.best == n && c.unlinked != n) {
       // Nothing follows the last event plausibly: a long self-consistent chain means the device
       // clock itself jumped (reset, or a misjudged last event); continue monotonically.
       if (chain_length_[c.unlinked] >= jump_chain) {
@@ -744,6 +885,10 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
   // arrived, so the newest event is live and the gap can be judged; unless the newest events
   // were still a backlog (the device clock ran faster than the host clock over them), in which
   // case the line only hiccuped in the middle of the backlog.
+  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
+      *idle_host_us_ - staged_.front().host_us >= config_.max_gap_hold_us) {
+    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
+  }
   if (judging_gap_ && !staged_.empty()) {
     const Staged& newest = staged_.back();
     const Staged& m = staged_[live_from_].host_us <= newest.host_us - config_.live_window_us
@@ -753,7 +898,16 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
     const std::int64_t host = newest.host_us - m.host_us;
     if (device > host + host / 4 + 4000) return out.size() - before;
   }
-  resolveGap(out, false);
+  // Nothing held ever ran faster than the host clock (a quiet gap, then live events): judged at
+  // once. After a backlog, the count must come out the same at the next idle read too (a
+  // writer that hiccups or is starved in the middle of a backlog also leaves the line idle).
+  bool backlog = false;
+  if (judging_gap_ && !staged_.empty()) {
+    const std::int64_t device = staged_.back().event.t_us - staged_.front().event.t_us;
+    const std::int64_t host = staged_.back().host_us - staged_.front().host_us;
+    backlog = device > host + host / 4 + 4000;
+  }
+  resolveGap(out, false, true, 0, !backlog);
   return out.size() - before;
 }
 

@@ -117,11 +117,11 @@ struct ParserConfig {
   bool infer_wraps_from_host_time = true;
   /// Absolute formats: the events after a gap that may hide wrap periods are held until the
   /// stream is live again: a read found the line idle, or over the last live_window_us of host
-  /// time the device clock advanced no faster than the host clock (plus a quarter and 2 ms).
+  /// time the device clock advanced as fast as the host clock (within 2 ms plus an eighth).
   std::int64_t live_window_us = 10000;
   /// ...and the liveliest of them is at most this much later than the latency floor, beyond
   /// whole periods [us] (the jitter of a live event's latency).
-  std::int64_t live_lag_us = 8000;
+  std::int64_t live_lag_us = 16000;
   /// ...or until they span this much host time: then the evidence there is decides [us].
   std::int64_t max_gap_hold_us = 1000000;
   /// Absolute-timestamp formats (E2..E4): an unconfirmed stream (no event published yet, or
@@ -257,7 +257,10 @@ class EventParser {
   /// Bytes of an incomplete event held back, waiting for the next feed().
   std::size_t pendingBytes() const;
   /// Tells the parser that a read returned no bytes (the line was idle); see TimestampUnwrapper.
-  void noteIdle() {
+  /// host_us: host time of the idle read, if known (lets flush() end a gap judgement that has
+  /// waited max_gap_hold_us).
+  void noteIdle(std::optional<std::int64_t> host_us = std::nullopt) {
+    if (host_us) idle_host_us_ = *host_us;
     if (!config_.infer_wraps_from_host_time) return;
     unwrapper_.noteIdle();
     ++idle_epoch_;
@@ -299,6 +302,21 @@ class EventParser {
   static std::int64_t hostSpan(const FrameRef& a, std::int64_t later_host_us);
   void publishFrame(std::size_t pos, const Link& step, bool first, bool trusted,
                     ebslam::EventVector& out);
+  void publishDecoded(std::uint8_t y_byte, std::uint8_t x_byte, const FrameRef& f, const Link& step,
+                      bool first, bool trusted, ebslam::EventVector& out);
+  // A frame read from held bytes at the given indices (frame size of them).
+  FrameRef frameFromBytes(const std::size_t* index) const;
+  Link linkFromLastRef(const FrameRef& f) const;
+  bool between(const FrameRef& f, const FrameRef& next) const;
+  // The one explanation of the bytes between the last published event and its confirmed
+  // successor at `next`, if there is exactly one (see decideAbsolute()).
+  struct Repair {
+    std::size_t index[8] = {};
+    FrameRef frame;
+    Link link;
+    std::size_t end = 0;  // held position after the bytes it explains
+  };
+  int decideRegion(std::size_t pos, std::size_t best, std::size_t next, Repair& repair) const;
   // Candidate frames near a position: the best one that follows the last event plausibly (and
   // another as good, if any), and the best one that does not.
   struct Candidates {
@@ -317,7 +335,11 @@ class EventParser {
   void stageOrEmit(const ebslam::Event& e, std::int64_t host_us, ebslam::EventVector& out);
   // Adds the hidden periods to the staged events and emits them; without `force`, only if the
   // liveliest staged event is late by at most live_lag_us beyond whole periods.
-  bool resolveGap(ebslam::EventVector& out, bool force);
+  // Without `force`, the count must also come out the same twice (see resolveGap()); `idle`:
+  // called after a read found the line idle; now_us: host time of the newest read.
+  // at_once: an idle read after events that never ran ahead of the host clock needs no second.
+  bool resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,
+                  bool at_once);
 
   std::vector<std::uint8_t> held_;         // bytes after the last published event
   std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
@@ -329,6 +351,7 @@ class EventParser {
   std::vector<char> chain_open_;           // per held position: the chain may grow with more bytes
   std::vector<std::int64_t> chain_advance_;   // per held position: device time its chain spans
   std::vector<std::int64_t> chain_end_host_;  // per held position: host time of its chain's end
+  std::vector<std::size_t> chain_next_;       // per held position: next frame of its chain
   struct Staged {
     ebslam::Event event;
     std::int64_t host_us;
@@ -338,7 +361,11 @@ class EventParser {
   std::size_t live_from_ = 0;         // staged_ index: the newest at least live_window_us old
   std::int64_t gap_residual_us_ = 0;  // least host time minus latency floor minus event time
   bool gap_residual_known_ = false;
-  std::int64_t gap_latency_us_ = 0;  // latency of a live event when the gap began
+  std::int64_t gap_latency_us_ = 0;
+  std::int64_t gap_candidate_k_ = -1;  // periods a first live check found, to be confirmed
+  std::int64_t gap_candidate_host_ = 0;
+  std::optional<std::int64_t> idle_host_us_;  // host time of the last idle read, if given
+  bool gap_candidate_idle_ = false;           // latency of a live event when the gap began
   std::uint32_t idle_epoch_ = 0;
   std::int64_t previous_read_host_ = kNoHost;
   bool mode_decided_ = false;  // set by the first bytes fed
