@@ -377,11 +377,18 @@ PointEventVector testEvents(const Trajectory& path) {
                              path.back().t_s);
 }
 
-TEST(EventSlam3d, TracksAKnownPathOnSyntheticDepthEvents) {
+// The thesis preset within 3 cm; the default preset (its diffusion chosen for the D-eDVS
+// simulator's hand-held paths, faster than this one at its 0.3 m in 3 s) within 12 cm (measured
+// 8.6 cm: its larger diffusion costs accuracy on slow paths).
+class TracksAKnownPath : public ::testing::TestWithParam<bool> {};
+
+TEST_P(TracksAKnownPath, OnSyntheticDepthEvents) {
+  const bool thesis = GetParam();
+  const double bound_m = thesis ? 0.03 : 0.12;
   const Trajectory truth = testPath(3.0);
   const PointEventVector events = testEvents(truth);
   ASSERT_GT(events.size(), 5000u);
-  EventSlam3d slam(Ebslam3dConfig::defaults());
+  EventSlam3d slam(thesis ? Ebslam3dConfig::thesis() : Ebslam3dConfig::defaults());
   Trajectory estimate;
   for (std::size_t i = 0; i < events.size(); i += 1000) {
     const std::size_t n = std::min<std::size_t>(1000, events.size() - i);
@@ -402,12 +409,14 @@ TEST(EventSlam3d, TracksAKnownPathOnSyntheticDepthEvents) {
     angle_sq += angle * angle;
   }
   const double n = static_cast<double>(estimate.size());
-  EXPECT_LT(std::sqrt(position_sq / n), 0.03);
-  EXPECT_LT(std::sqrt(angle_sq / n) * 180.0 / M_PI, 2.0);
-  EXPECT_LT((estimate.back().position - truth.back().position).norm(), 0.05);
+  EXPECT_LT(std::sqrt(position_sq / n), bound_m);
+  EXPECT_LT(std::sqrt(angle_sq / n) * 180.0 / M_PI, thesis ? 2.0 : 8.0);
+  EXPECT_LT((estimate.back().position - truth.back().position).norm(), thesis ? 0.05 : 0.2);
   EXPECT_GT(slam.map().chunkCount(), 10u);
   EXPECT_LE(slam.peakMemoryBytes(), 30u << 20);
 }
+INSTANTIATE_TEST_SUITE_P(EventSlam3d, TracksAKnownPath, ::testing::Values(true, false),
+                         [](const auto& info) { return info.param ? "Thesis" : "Default"; });
 
 TEST(EventSlam3d, BadPointsAreSkippedAndCountedWithoutChangingTheResult) {
   const Trajectory truth = testPath(0.5);

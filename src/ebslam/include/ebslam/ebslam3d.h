@@ -93,8 +93,8 @@ struct Ebslam3dConfig {
   /// [m / sqrt(s)], [rad / sqrt(s)]. A batch spanning dt gets variance sigma^2 dt (plus the
   /// per-event part B sigma_event^2), dt capped at max_diffusion_dt_s: the spread the particles
   /// get depends on how far the sensor can have moved, not on how many events it fired.
-  double sigma_position_per_sqrt_s = 0.05;
-  double sigma_rotation_per_sqrt_s = 0.05;
+  double sigma_position_per_sqrt_s = 0.1;
+  double sigma_rotation_per_sqrt_s = 0.3;
   double max_diffusion_dt_s = 0.1;  ///< [s]
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
