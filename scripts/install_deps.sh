@@ -4,37 +4,30 @@
 # Waits for the dpkg lock instead of failing; never asks a question.
 set -euo pipefail
 
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+# What the workspace's code needs comes from its package.xml files: every declared rosdep key, mapped
+# to Debian packages by scripts/rosdep_debian.txt (scripts/check_package_deps.py checks that the
+# package.xml files are complete). Reading them needs Debian's python3 (pyenv's may come first on PATH).
+if [ ! -x /usr/bin/python3 ]; then
+  [ "$(id -u)" -eq 0 ] || { echo "install_deps: /usr/bin/python3 missing; run as root" >&2; exit 1; }
+  DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=900 update
+  DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=900 -y --no-install-recommends \
+    install python3-minimal
+fi
+mapfile -t declared < <(/usr/bin/python3 "${repo}/scripts/check_package_deps.py" --list-debian)
+[ ${#declared[@]} -gt 0 ] || { echo "install_deps: no packages read from package.xml" >&2; exit 1; }
+
+# Beyond what any package declares: the tools of the developers' workflow and of `make test`.
 packages=(
-  # build
-  build-essential cmake pkg-config git catkin catkin-tools ros-message-generation ros-message-runtime
-  libgtest-dev libgmock-dev libbenchmark-dev clang-format clang-tidy cppcheck
+  "${declared[@]}"
+  # build tools (catkin build, compilers, formatting and static analysis)
+  build-essential pkg-config git catkin-tools libbenchmark-dev clang-format clang-tidy cppcheck
   # fuzzing (libFuzzer runtime for clang)
   clang libclang-rt-14-dev
-  # ROS client, messages (C++ headers, .msg files, python)
-  libroscpp-dev python3-rospy
-  libstd-msgs-dev ros-std-msgs python3-std-msgs
-  libstd-srvs-dev ros-std-srvs python3-std-srvs
-  libgeometry-msgs-dev ros-geometry-msgs python3-geometry-msgs
-  libsensor-msgs-dev ros-sensor-msgs python3-sensor-msgs
-  libnav-msgs-dev ros-nav-msgs python3-nav-msgs
-  libvisualization-msgs-dev ros-visualization-msgs python3-visualization-msgs
-  libdiagnostic-msgs-dev ros-diagnostic-msgs python3-diagnostic-msgs
-  # tf2
-  libtf2-dev libtf2-ros-dev libtf2-geometry-msgs-dev libtf2-eigen-dev python3-tf2-ros python3-tf2-msgs tf2-tools
-  # perception
-  libcv-bridge-dev libimage-transport-dev libpcl-conversions-dev libpcl-ros-dev
-  libcamera-info-manager-dev libcamera-calibration-parsers-dev libdiagnostic-updater-dev
-  # tools
-  python3-roslaunch python3-rostest librostest-dev python3-rosunit librosbag-dev librosbag-storage-dev
-  python3-rosbag python3-rostopic python3-rosnode python3-rosparam python3-rosservice python3-rosmsg
-  python3-rosmaster rosout rosbash topic-tools python3-message-filters
-  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  libnodeletlib-dev libnodelet-dev libnodeletlib-tools libclass-loader-dev
-  rviz
-  # libraries
-  libeigen3-dev libopencv-dev libopencv-contrib-dev libpcl-dev libopenni2-dev libusb-1.0-0-dev
-  libspectra-dev libceres-dev libtbb-dev libcli11-dev nlohmann-json3-dev libserialport-dev
-  python3-matplotlib python3-numpy
+  # running launch files and inspecting a running system (roscore, rostopic, rosnode...)
+  python3-roslaunch python3-rosnode python3-rosparam python3-rosservice python3-rosmsg
+  python3-rostopic python3-rosmaster rosout rosbash topic-tools python3-tf2-msgs
   # headless viewing and hostname resolution
   xvfb xauth libgl1-mesa-dri imagemagick hostname
 )

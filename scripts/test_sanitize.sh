@@ -3,6 +3,7 @@
 # Debug with AddressSanitizer and UndefinedBehaviorSanitizer (test/sanitize/) and runs their
 # tests under them. Any sanitizer finding fails its test; known false alarms of uninstrumented
 # Debian libraries are suppressed in test/sanitize/*.supp (each one explained).
+# Then the message fuzz targets (test/fuzz/run_fuzz.sh), FUZZ_SECONDS each (default 30).
 # Last line: "sanitize: N passed, N failed, N skipped".
 # Environment: SANITIZE_DIR (build folder, default <repo>/.ws/sanitize), JOBS (default: cores),
 # SANITIZE_RESULTS (JUnit folder, default <build folder>/test_results).
@@ -38,7 +39,15 @@ status=0
 grep -E "tests passed|FAILED|Failed|ERROR: (Address|Leak)Sanitizer|runtime error" "${build}/ctest.log" | head -n 40 || true
 tested=$(date +%s)
 echo "test-sanitize: build $((built - start)) s, tests $((tested - built)) s (log: ${build}/ctest.log)"
-counts=$(/usr/bin/python3 "${repo}/scripts/count_junit.py" "${results}") || status=1
+# Every message a nodelet subscribes to, fuzzed through its conversion (test/fuzz, clang):
+# FUZZ_SECONDS per target (default 30; 0 skips them). One JUnit case per target.
+if [ "${FUZZ_SECONDS:-30}" != 0 ]; then
+  FUZZ_BUILD="${build}/fuzz" FUZZ_RESULTS="${results}" JOBS="${jobs}" \
+    bash "${repo}/test/fuzz/run_fuzz.sh" "${FUZZ_SECONDS:-30}" || status=1
+  echo "test-sanitize: fuzzing $(( $(date +%s) - tested )) s"
+fi
+counts=$(/usr/bin/python3 "${repo}/scripts/count_junit.py" \
+  --expected-skips "${repo}/test/expected_skips.txt" "${results}") || status=1
 printf '%s\n' "${counts}" | sed '$d'
 echo "sanitize: $(printf '%s\n' "${counts}" | tail -n 1)"
 exit "${status}"

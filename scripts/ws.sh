@@ -49,6 +49,21 @@ package_build_type() {
   if grep -q '<build_type>cmake</build_type>' "$1/package.xml"; then echo cmake; else echo catkin; fi
 }
 
+# A step that failed must show as a failure in the summary even when it left no JUnit file that
+# says so (a test binary that crashed while ctest listed it, a make error, catkin_test_results
+# finding a missing result): then a synthetic failed case <label> is written into the results.
+record_failure() {
+  local label="$1" message="$2" checked="$3"
+  if [ -e "${checked}" ] &&
+     ! /usr/bin/python3 "${repo}/scripts/count_junit.py" "${checked}" 2>/dev/null | tail -n 1 |
+       grep -q ' 0 failed'; then
+    return 0  # the failure is in the results already
+  fi
+  message=$(printf '%s' "${message}" | tr -d '\000-\010' | sed 's/&/\&amp;/g; s/</\&lt;/g; s/>/\&gt;/g; s/"/\&quot;/g')
+  printf '<?xml version="1.0"?><testsuite name="%s" tests="1" failures="1"><testcase classname="ws" name="%s"><failure message="%s"/></testcase></testsuite>\n' \
+    "${label}" "${label}" "${message}" >"${results}/${label}-run-failure.xml"
+}
+
 run_tests() {
   cd "${ws}"
   # shellcheck disable=SC1091
@@ -63,6 +78,10 @@ run_tests() {
                             [ -e "${dir}/CATKIN_IGNORE" ] && continue
                             echo "$(sed -n 's:.*<name>\(.*\)</name>.*:\1:p' "${xml}" | head -n1) ${dir#"${repo}"/}"
                           done)
+  # Checks of the workspace as a whole: package.xml completeness (scripts/check_package_deps.py).
+  echo "=== workspace checks"
+  /usr/bin/python3 "${repo}/scripts/tests/workspace_checks.py" "${results}/workspace_checks.xml" \
+    </dev/null 2>&1 | tail -n 3 || status=1
   local entry name path
   for entry in "${packages[@]}"; do
     read -r name path <<<"${entry}"
@@ -73,25 +92,47 @@ run_tests() {
       # Plain CMake package: its gtest cases are ctest tests; ctest writes JUnit.
       if [ -f "${build_dir}/CTestTestfile.cmake" ]; then
         # Tests read no standard input (rosbag play would take the package list below as key presses).
+        local ctest_status=0
         (cd "${build_dir}" && ctest --output-on-failure --timeout 600 -j "${jobs}" </dev/null \
-          --output-junit "${results}/${name}-ctest.xml") | tail -n 25 || status=1
+          --output-junit "${results}/${name}-ctest.xml") >"${results}/${name}-ctest.log" 2>&1 ||
+          ctest_status=$?
+        tail -n 25 "${results}/${name}-ctest.log"
+        if [ "${ctest_status}" -ne 0 ]; then
+          status=1
+          record_failure "${name}-ctest" "ctest exited with status ${ctest_status}: $(grep -m3 -E 'Error|error|\*\*\*|Failed' "${results}/${name}-ctest.log" | tr '\n' ' ')" \
+            "${results}/${name}-ctest.xml"
+        fi
       else
         echo "ws: ${name} has no CTestTestfile.cmake: its tests were not configured" >&2
         status=1
       fi
     else
       # catkin package: run_tests writes gtest/rostest XML (a crashed test gets a MISSING-result failure).
-      make -C "${build_dir}" run_tests </dev/null >"${results}/${name}-run_tests.log" 2>&1 || status=1
+      local make_status=0
+      make -C "${build_dir}" run_tests </dev/null >"${results}/${name}-run_tests.log" 2>&1 || make_status=$?
       tail -n 40 "${results}/${name}-run_tests.log" | grep -E '^\[ *(OK|FAILED|PASSED|RUN) *\]|FAILURE|ERROR|SUMMARY|Ran ' || true
       if [ -d "${build_dir}/test_results/${name}" ]; then
         mkdir -p "${results}/${name}"
         cp "${build_dir}/test_results/${name}"/*.xml "${results}/${name}/" 2>/dev/null || true
       fi
+      if [ "${make_status}" -ne 0 ]; then
+        status=1
+        record_failure "${name}-run_tests" "make run_tests exited with status ${make_status} (log ${results}/${name}-run_tests.log)" \
+          "${results}/${name}"
+      fi
     fi
   done
-  # catkin_test_results checks catkin's own XML; our counter reads every file once (no double counting).
-  catkin_test_results "${results}" >/dev/null 2>&1 || status=1
-  /usr/bin/python3 "${repo}/scripts/count_junit.py" "${results}" || status=1
+  # catkin_test_results checks catkin's own XML (and finds missing results); our counter reads
+  # every file once (no double counting). Its failures are shown and counted, never discarded.
+  local catkin_results
+  if ! catkin_results=$(catkin_test_results "${results}" 2>&1); then
+    status=1
+    printf '%s\n' "${catkin_results}" | grep -vE '^(Summary|$)' | grep -iE 'fail|error|missing' | head -n 20 || true
+    record_failure catkin_test_results "catkin_test_results: $(printf '%s' "${catkin_results}" | tail -n 1)" "${results}"
+  fi
+  # Every skip is named; one that test/expected_skips.txt does not list fails the run.
+  /usr/bin/python3 "${repo}/scripts/count_junit.py" --expected-skips "${repo}/test/expected_skips.txt" \
+    "${results}" || status=1
   return "${status}"
 }
 

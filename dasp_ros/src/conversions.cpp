@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -24,12 +25,25 @@ cv::Mat shareImage(const sensor_msgs::Image& image, int expected_type) {
     throw std::invalid_argument("image message is empty (" + std::to_string(image.width) + "x" +
                                 std::to_string(image.height) + ")");
   }
-  const std::size_t row_bytes = image.width * CV_ELEM_SIZE(expected_type);
-  if (image.step < row_bytes || image.data.size() < image.step * image.height) {
+  // All size arithmetic in size_t: width, height and step are uint32, and their products
+  // overflow 32 bits for images such as 65536 x 65537 (step x height wrapped to a small number
+  // once passed this check, and cloning the "image" read far beyond the data).
+  const std::size_t element_bytes = CV_ELEM_SIZE(expected_type);
+  const std::size_t channel_bytes = CV_ELEM_SIZE1(expected_type);
+  const std::size_t width = image.width, height = image.height, step = image.step;
+  // cv::Mat holds rows and columns in int, and its row step must be a whole number of channels.
+  constexpr std::size_t kIntMax = static_cast<std::size_t>(std::numeric_limits<int>::max());
+  if (width > kIntMax || height > kIntMax || width * element_bytes > kIntMax) {
+    throw std::invalid_argument("image message of " + std::to_string(width) + "x" +
+                                std::to_string(height) + " " + image.encoding +
+                                " is larger than OpenCV can hold");
+  }
+  const std::size_t row_bytes = width * element_bytes;
+  if (step < row_bytes || step % channel_bytes != 0 || image.data.size() / step < height) {
     throw std::invalid_argument("image message data (" + std::to_string(image.data.size()) +
-                                " bytes, step " + std::to_string(image.step) + ") too small for " +
-                                std::to_string(image.width) + "x" + std::to_string(image.height) +
-                                " " + image.encoding);
+                                " bytes, step " + std::to_string(step) + ") too small for " +
+                                std::to_string(width) + "x" + std::to_string(height) + " " +
+                                image.encoding);
   }
   if (image.is_bigendian) {
     throw std::invalid_argument("big-endian image data is not supported");
@@ -239,6 +253,15 @@ dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
     dasp::Superpixel sp;
     forSharedFields(sp, in, [](auto& to, const auto& from) { assignConverted(to, from); });
     result.superpixels.push_back(sp);
+  }
+  // Labels index the array (the core indexes with them): -1 (none) up to size - 1.
+  double min_label = 0.0, max_label = -1.0;
+  cv::minMaxLoc(result.labels, &min_label, &max_label);
+  if (min_label < -1.0 || max_label >= static_cast<double>(result.superpixels.size())) {
+    throw std::invalid_argument(
+        "labels " + std::to_string(static_cast<long long>(min_label)) + ".." +
+        std::to_string(static_cast<long long>(max_label)) + " do not index the " +
+        std::to_string(result.superpixels.size()) + " superpixels (-1 = none)");
   }
   return result;
 }

@@ -111,28 +111,32 @@ std::string RgbdInput::stallReason() {
 }
 
 dasp::RgbdFrame RgbdInput::convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
-                                   const sensor_msgs::CameraInfo& info) const {
+                                   const sensor_msgs::CameraInfo& info,
+                                   const std::array<std::string, 3>& topics) {
+  const std::string& color_topic = topics[0];
+  const std::string& depth_topic = topics[1];
+  const std::string& info_topic = topics[2];
   dasp::RgbdFrame frame;
   try {
     frame.color = toColorMat(color);
   } catch (const std::invalid_argument& e) {
-    throw InputError(colorTopic(), e.what());
+    throw InputError(color_topic, e.what());
   }
   try {
     frame.depth = toDepthMat(depth);
   } catch (const std::invalid_argument& e) {
-    throw InputError(depthTopic(), e.what());
+    throw InputError(depth_topic, e.what());
   }
   if (color.width != depth.width || color.height != depth.height) {
-    throw InputError(depthTopic(), "depth image " + std::to_string(depth.width) + "x" +
+    throw InputError(depth_topic, "depth image " + std::to_string(depth.width) + "x" +
                                        std::to_string(depth.height) + " differs from the colour " +
                                        std::to_string(color.width) + "x" +
-                                       std::to_string(color.height) + " of " + colorTopic() +
+                                       std::to_string(color.height) + " of " + color_topic +
                                        ": it must be registered to it");
   }
   if ((info.width != 0 || info.height != 0) &&
       (info.width != color.width || info.height != color.height)) {
-    throw InputError(infoTopic(), "camera_info is for " + std::to_string(info.width) + "x" +
+    throw InputError(info_topic, "camera_info is for " + std::to_string(info.width) + "x" +
                                       std::to_string(info.height) + ", the images are " +
                                       std::to_string(color.width) + "x" +
                                       std::to_string(color.height));
@@ -140,10 +144,10 @@ dasp::RgbdFrame RgbdInput::convert(const sensor_msgs::Image& color, const sensor
   try {
     frame.intrinsics = toIntrinsics(info);
   } catch (const std::invalid_argument& e) {
-    throw InputError(infoTopic(), e.what());
+    throw InputError(info_topic, e.what());
   }
   if (cv::countNonZero(frame.depth) == 0) {
-    throw InputError(depthTopic(), "no valid depth pixel in the " + depth.encoding +
+    throw InputError(depth_topic, "no valid depth pixel in the " + depth.encoding +
                                        " image (all zero, NaN or out of range)");
   }
   return frame;

@@ -120,13 +120,6 @@ class SdaspNodelet : public nodelet::Nodelet {
     dasp::SdaspSegmentation result;
     try {
       superpixels = toSuperpixels(*array, *labels_msg);
-      double max_label = -1.0;
-      cv::minMaxLoc(superpixels.labels, nullptr, &max_label);
-      if (max_label >= static_cast<double>(superpixels.superpixels.size())) {
-        throw std::invalid_argument("label " + std::to_string(static_cast<long long>(max_label)) +
-                                    " has no superpixel (the array holds " +
-                                    std::to_string(superpixels.superpixels.size()) + ")");
-      }
     } catch (const std::invalid_argument& e) {
       reject(labels_topic_ + " does not match " + array_topic_ + ": " + e.what());
       return;

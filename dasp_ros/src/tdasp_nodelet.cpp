@@ -90,13 +90,14 @@ class TdaspNodelet : public nodelet::Nodelet {
 
   // A new stream numbers its strands and segments from 0 again; the offsets keep the published
   // ids unique over resets, so that no subscriber mistakes a new strand for an old one.
-  void resetLocked(const std::string& why) {
+  // `log`: false for resets caused by input, which onFrame reports throttled itself.
+  void resetLocked(const std::string& why, bool log = true) {
     tdasp_ = std::make_unique<dasp::TemporalDasp>(config_.tdasp);
     strand_offset_ = max_strand_ + 1;
     label_offset_ = max_label_ + 1;
     ++resets_;
     stream_frames_ = 0;
-    NODELET_INFO("t-DASP reset: %s", why.c_str());
+    if (log) NODELET_INFO("t-DASP reset: %s", why.c_str());
   }
 
   void onFrame(const sensor_msgs::ImageConstPtr& color_msg,
@@ -115,15 +116,16 @@ class TdaspNodelet : public nodelet::Nodelet {
       const std::string why = input_->colorTopic() + ": stamp went back by " +
                               std::to_string((last_stamp_ - header.stamp).toSec()) +
                               " s (a looping bag?)";
-      NODELET_WARN("%s; t-DASP starts a new stream", why.c_str());
-      resetLocked(why);
+      // Throttled per reason: a stream stepping back with every frame must not flood the log.
+      if (throttle_.allow(why)) NODELET_WARN("%s; t-DASP starts a new stream", why.c_str());
+      resetLocked(why, false);
     } else if (stream_frames_ > 0 && frame.color.size() != last_size_) {
       const std::string why =
           input_->colorTopic() + ": image size changed from " + std::to_string(last_size_.width) +
           "x" + std::to_string(last_size_.height) + " to " + std::to_string(frame.color.cols) +
           "x" + std::to_string(frame.color.rows);
-      NODELET_WARN("%s; t-DASP starts a new stream", why.c_str());
-      resetLocked(why);
+      if (throttle_.allow(why)) NODELET_WARN("%s; t-DASP starts a new stream", why.c_str());
+      resetLocked(why, false);
     }
     dasp::TdaspFrame out;
     try {

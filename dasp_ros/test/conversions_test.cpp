@@ -150,6 +150,53 @@ TEST(Conversions, BadMessagesThrowInvalidArgument) {
   EXPECT_THROW(dasp_ros::toIntrinsics(nan_info), std::invalid_argument);
 }
 
+// Sizes whose byte counts overflow 32 bits: a 65536 x 65537 bgr8 image with a few bytes of data
+// passed the size check once (step x height wrapped to 65536 bytes) and crashed the nodelet
+// manager in clone(). Every conversion must reject such messages with invalid_argument.
+TEST(Conversions, SizesOverflowing32BitsAreRejected) {
+  sensor_msgs::Image msg;
+  msg.width = 65536;
+  msg.height = 65537;
+  msg.encoding = "bgr8";
+  msg.step = 3 * 65536;  // 196608 x 65537 = 12885098496 bytes = 65536 + 3 * 2^32
+  msg.data.assign(65536, 0);
+  EXPECT_THROW(toColorMat(msg), std::invalid_argument);
+  for (const char* encoding : {"rgb8", "bgra8", "rgba8", "mono8"}) {
+    msg.encoding = encoding;
+    msg.step = static_cast<uint32_t>(65536 * sensor_msgs::image_encodings::numChannels(encoding));
+    EXPECT_THROW(toColorMat(msg), std::invalid_argument) << encoding;
+  }
+  msg.step = 2 * 65536;  // 16UC1: step x height = 2^33 + 2^17, wraps to 131072
+  msg.data.assign(131072, 0);
+  for (const char* encoding : {"16UC1", "mono16"}) {
+    msg.encoding = encoding;
+    EXPECT_THROW(dasp_ros::toDepthMat(msg), std::invalid_argument) << encoding;
+  }
+  msg.encoding = "32FC1";
+  msg.step = 4 * 65536;  // wraps to 262144
+  msg.data.assign(262144, 0);
+  EXPECT_THROW(dasp_ros::toDepthMat(msg), std::invalid_argument);
+  msg.encoding = "32SC1";
+  EXPECT_THROW(dasp_ros::toLabelMat(msg), std::invalid_argument);
+  // A row of more bytes than int holds, and a height beyond int (OpenCV's limits).
+  msg.width = 0x80000000u;
+  msg.height = 1;
+  msg.step = 0xFFFFFFFFu;
+  msg.encoding = "mono8";
+  EXPECT_THROW(toColorMat(msg), std::invalid_argument);
+  msg.width = 1;
+  msg.height = 0x80000000u;
+  msg.step = 1;
+  EXPECT_THROW(toColorMat(msg), std::invalid_argument);
+  // A step that is not a whole number of channels: cv::Mat would throw cv::Exception.
+  msg.width = 2;
+  msg.height = 2;
+  msg.step = 5;
+  msg.encoding = "16UC1";
+  msg.data.assign(10, 0);
+  EXPECT_THROW(dasp_ros::toDepthMat(msg), std::invalid_argument);
+}
+
 }  // namespace
 
 namespace {

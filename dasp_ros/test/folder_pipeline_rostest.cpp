@@ -14,6 +14,7 @@
 #include <map>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "dasp_ros/conversions.h"
 
@@ -23,79 +24,109 @@ TEST(FolderPipeline, LabelsEqualTheCoreLibraryFrameByFrame) {
   ros::NodeHandle pnh("~");
   std::string folder;
   int frames = 3;
-  pnh.getParam("folder", folder);
-  pnh.getParam("frames", frames);
+  // Required: a renamed parameter must fail the test, not quietly test something else.
+  ASSERT_TRUE(pnh.getParam("folder", folder)) << "~folder not set";
+  ASSERT_TRUE(pnh.getParam("frames", frames)) << "~frames not set";
   const std::vector<dasp::RgbdFramePaths> paths = dasp::listRgbdFolder(folder);
   ASSERT_GE(static_cast<int>(paths.size()), frames);
 
-  // By header.seq: the source numbers its messages 0, 1, ... in folder order and loops, so frame
-  // index = seq modulo the frame count, and frames missed before this node connected come again.
-  // Both labels of one frame are compared from the same message (same seq): the two subscriptions
-  // may connect at different times.
-  const uint32_t n = static_cast<uint32_t>(paths.size());
-  std::mutex mutex;
-  std::map<uint32_t, sensor_msgs::Image> superpixel_labels, segment_labels;  // by seq
-  std::map<uint32_t, uint32_t> complete;  // frame index -> first seq with both labels
-  const auto note = [&](uint32_t seq) {
-    if (superpixel_labels.count(seq) > 0 && segment_labels.count(seq) > 0) {
-      complete.emplace(seq % n, seq);
+  // Frames are identified by header.stamp, never header.seq (roscpp renumbers seq per publisher
+  // across processes, and image_transport publishes nothing while nobody subscribes, so seq says
+  // nothing about the folder position). The source stamps the colour image and both label images
+  // of one frame alike; the colour image's content names the folder frame. Frames whose colour
+  // image this node missed (its subscription connected later) are left out: the source loops.
+  const std::size_t n = paths.size();
+  std::vector<cv::Mat> colours;
+  for (const dasp::RgbdFramePaths& p : paths) colours.push_back(dasp::loadRgbdFrame(p).color);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 1; j < n; ++j) {
+      ASSERT_FALSE(colours[i].size() == colours[j].size() &&
+                   cv::countNonZero(cv::Mat(colours[i] != colours[j]).reshape(1)) == 0)
+          << paths[i].name << " and " << paths[j].name << " have the same colour image";
     }
+  }
+  const auto frameOf = [&](const sensor_msgs::Image& colour) -> int {
+    const cv::Mat mat = dasp_ros::toColorMat(colour);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (mat.size() == colours[i].size() &&
+          cv::countNonZero(cv::Mat(mat != colours[i]).reshape(1)) == 0) {
+        return static_cast<int>(i);
+      }
+    }
+    return -1;
   };
+  std::mutex mutex;
+  std::map<ros::Time, sensor_msgs::Image> superpixel_labels, segment_labels;  // by stamp
+  std::map<ros::Time, int> frame_of_stamp;  // stamp -> folder frame index (from the colour image)
   ros::NodeHandle nh("camera");
+  ros::Subscriber colour_sub = nh.subscribe<sensor_msgs::Image>(
+      "rgb/image_rect_color", 50, [&](const sensor_msgs::ImageConstPtr& m) {
+        const int index = frameOf(*m);
+        std::lock_guard<std::mutex> lock(mutex);
+        frame_of_stamp.emplace(m->header.stamp, index);
+      });
   ros::Subscriber a = nh.subscribe<sensor_msgs::Image>(
       "superpixels/labels", 50, [&](const sensor_msgs::ImageConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex);
-        superpixel_labels.emplace(m->header.seq, *m);
-        note(m->header.seq);
+        superpixel_labels.emplace(m->header.stamp, *m);
       });
-  ros::Subscriber b = nh.subscribe<sensor_msgs::Image>("segments/labels", 50,
-                                                       [&](const sensor_msgs::ImageConstPtr& m) {
-                                                         std::lock_guard<std::mutex> lock(mutex);
-                                                         segment_labels.emplace(m->header.seq, *m);
-                                                         note(m->header.seq);
-                                                       });
-  ros::AsyncSpinner spinner(1);
+  ros::Subscriber b = nh.subscribe<sensor_msgs::Image>(
+      "segments/labels", 50, [&](const sensor_msgs::ImageConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        segment_labels.emplace(m->header.stamp, *m);
+      });
+  // Stamps with the colour image and both labels, by folder frame index (mutex held).
+  const auto complete = [&]() {
+    std::map<int, std::vector<ros::Time>> by_frame;
+    for (const auto& [stamp, index] : frame_of_stamp) {
+      if (index >= 0 && superpixel_labels.count(stamp) > 0 && segment_labels.count(stamp) > 0) {
+        by_frame[index].push_back(stamp);
+      }
+    }
+    return by_frame;
+  };
+  ros::AsyncSpinner spinner(2);
   spinner.start();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(75);
   while (std::chrono::steady_clock::now() < deadline) {
     {
       std::lock_guard<std::mutex> lock(mutex);
+      const auto by_frame = complete();
       bool all = true;
-      for (uint32_t i = 0; i < static_cast<uint32_t>(frames); ++i) {
-        all = all && complete.count(i) > 0;
-      }
+      std::size_t total = 0;
+      for (const auto& [index, stamps] : by_frame) total += stamps.size();
+      for (int i = 0; i < frames; ++i) all = all && by_frame.count(i) > 0;
       // And a second loop of the folder, to compare frames processed after others.
-      const bool looped = !segment_labels.empty() && segment_labels.rbegin()->first >= 2 * n;
-      if (all && looped) break;
+      if (all && total >= 2 * n) break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::lock_guard<std::mutex> lock(mutex);
+  const auto by_frame = complete();
+  std::size_t total = 0;
+  for (const auto& [index, stamps] : by_frame) total += stamps.size();
+  EXPECT_GE(total, 2 * n) << "fewer complete frames than two loops of the folder";
   const dasp::SdaspConfig sdasp;
   ASSERT_EQ(sdasp.cut, dasp::CutRule::kAdaptive);  // the Sdasp default: the per-frame cut
   for (int i = 0; i < frames; ++i) {
     SCOPED_TRACE(paths[static_cast<std::size_t>(i)].name);
-    ASSERT_EQ(complete.count(static_cast<uint32_t>(i)), 1u)
-        << "no message of this frame with both labels";
-    const uint32_t seq = complete[static_cast<uint32_t>(i)];
+    ASSERT_EQ(by_frame.count(i), 1u) << "no message of this frame with both labels";
     const dasp::RgbdFrame frame = dasp::loadRgbdFrame(paths[static_cast<std::size_t>(i)]);
     const dasp::Superpixels expected = dasp::computeDasp(frame, dasp::DaspConfig{});
     const dasp::WeightedGraph ucg = dasp::ultrametricContourGraph(expected, sdasp);
     const cv::Mat segments = dasp::segmentPixels(
         expected.labels, dasp::segmentGraph(ucg, dasp::cutThreshold(ucg, sdasp)));
-    EXPECT_EQ(superpixel_labels[seq].header.frame_id, "camera_rgb_optical_frame");
-    EXPECT_EQ(segment_labels[seq].header.frame_id, "camera_rgb_optical_frame");
     // Every message of this frame, from any loop of the folder: the nodes keep state across
     // frames (reused buffers), and that must not change a result.
-    for (const auto& [received_seq, sp] : superpixel_labels) {
-      if (received_seq % n != static_cast<uint32_t>(i)) continue;
+    for (const ros::Time& stamp : by_frame.at(i)) {
+      const sensor_msgs::Image& sp = superpixel_labels.at(stamp);
+      const sensor_msgs::Image& seg = segment_labels.at(stamp);
+      EXPECT_EQ(sp.header.frame_id, "camera_rgb_optical_frame");
+      EXPECT_EQ(seg.header.frame_id, "camera_rgb_optical_frame");
       EXPECT_EQ(cv::countNonZero(dasp_ros::toLabelMat(sp) != expected.labels), 0)
-          << "superpixel labels of seq " << received_seq;
-    }
-    for (const auto& [received_seq, seg] : segment_labels) {
-      if (received_seq % n != static_cast<uint32_t>(i)) continue;
+          << "superpixel labels stamped " << stamp;
       EXPECT_EQ(cv::countNonZero(dasp_ros::toLabelMat(seg) != segments), 0)
-          << "segment labels of seq " << received_seq;
+          << "segment labels stamped " << stamp;
     }
   }
 }

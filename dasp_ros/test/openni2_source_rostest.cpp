@@ -3,6 +3,7 @@
 // topics advertised.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
+#include <nodelet/NodeletLoad.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 
@@ -34,6 +35,19 @@ TEST(OpenNi2Source, WithoutADeviceItReportsRetriesWithBackoffAndKeepsRunning) {
       });
   ros::AsyncSpinner spinner(1);
   spinner.start();
+  // Load the source once connected to the manager's /rosout (and this node's), so that no
+  // message of the first retries is missed.
+  const auto connected = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (log.getNumPublishers() < 2 && std::chrono::steady_clock::now() < connected) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_GE(log.getNumPublishers(), 2u) << "not connected to the manager's /rosout";
+  ASSERT_TRUE(ros::service::waitForService("/camera/manager/load_nodelet", ros::Duration(30.0)));
+  nodelet::NodeletLoad load;
+  load.request.name = "/camera/openni2";
+  load.request.type = "dasp_ros/OpenNi2Source";
+  ASSERT_TRUE(ros::service::call("/camera/manager/load_nodelet", load));
+  EXPECT_TRUE(load.response.success);
   auto has = [&](const std::string& text) {
     std::lock_guard<std::mutex> lock(mutex);
     return std::any_of(errors.begin(), errors.end(),

@@ -42,6 +42,14 @@ void spinFor(double seconds) {
   }
 }
 
+// Spins until done() or `seconds` of wall time; returns done().
+template <typename Predicate>
+bool spinUntil(Predicate done, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (!done() && ros::WallTime::now() < end) spinFor(0.01);
+  return done();
+}
+
 TEST(RgbdFolderSourceFaults, ScalesIntrinsicsAndNamesEachSkippedFrameOnce) {
   RosoutLog log;
   // The manager's log must be connected before the source starts (it waits for rgb/image).
@@ -57,8 +65,17 @@ TEST(RgbdFolderSourceFaults, ScalesIntrinsicsAndNamesEachSkippedFrameOnce) {
   auto info_sub = nh.subscribe<sensor_msgs::CameraInfo>(
       "faults/rgb/camera_info", 100,
       [&](const sensor_msgs::CameraInfoConstPtr& m) { infos.push_back(*m); });
-  // 20 Hz over three frames: about seven cycles, each skipping the two bad frames again.
-  spinFor(3.5);
+  // 20 Hz over three frames: at least three cycles, each skipping the two bad frames again,
+  // and the reports of the first (generous timeout: a loaded machine is slow, not wrong).
+  EXPECT_TRUE(spinUntil(
+      [&] {
+        return images.size() >= 3 && infos.size() >= 3 &&
+               log.count(rosgraph_msgs::Log::WARN, "320x240 pixels") >= 1 &&
+               log.count(rosgraph_msgs::Log::ERROR, "skipping frame truncated2") >= 1 &&
+               log.count(rosgraph_msgs::Log::ERROR, "skipping frame wide3") >= 1;
+      },
+      60.0));
+  spinFor(0.2);  // messages of the cycle in transit
 
   ASSERT_GE(images.size(), 3u) << "the 320x240 frame is published on every cycle";
   ASSERT_GE(infos.size(), 3u);
@@ -96,7 +113,14 @@ TEST(RgbdFolderSourceFaults, StopsWithAFatalReasonWhenItCannotStart) {
   EXPECT_FALSE(loadSource("/source_without_folder", ""));
   EXPECT_FALSE(loadSource("/source_of_missing_folder", "/nonexistent/rgbd/folder"));
   EXPECT_FALSE(loadSource("/source_of_empty_folder", "/"));
-  spinFor(1.0);
+  EXPECT_TRUE(spinUntil(
+      [&] {
+        return log.count(rosgraph_msgs::Log::FATAL, "/source_without_folder/folder is not set") >=
+                   1 &&
+               log.count(rosgraph_msgs::Log::FATAL, "/nonexistent/rgbd/folder") >= 1 &&
+               log.count(rosgraph_msgs::Log::FATAL, "no <name>_rgb.png") >= 1;
+      },
+      30.0));
   EXPECT_EQ(log.count(rosgraph_msgs::Log::FATAL, "/source_without_folder/folder is not set"), 1);
   EXPECT_EQ(log.count(rosgraph_msgs::Log::FATAL, "/nonexistent/rgbd/folder"), 1);
   EXPECT_EQ(log.count(rosgraph_msgs::Log::FATAL, "no <name>_rgb.png"), 1);

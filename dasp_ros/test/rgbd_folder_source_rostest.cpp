@@ -55,20 +55,46 @@ TEST(RgbdFolderSource, PublishesTheFolderWithFrameAndStamp) {
   for (const auto& d : received.depth) depth_by_stamp[d.header.stamp] = &d;
   const auto frames = dasp::listRgbdFolder(SAMPLE_SESSION_DIR);
   ASSERT_FALSE(frames.empty());
+  // A message's frame is found by its content (never by header.seq, which roscpp renumbers per
+  // publisher): the folder's colour images must differ from each other for that.
+  std::vector<dasp::RgbdFrame> expected;
+  for (const auto& paths : frames) expected.push_back(dasp::loadRgbdFrame(paths));
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    for (std::size_t j = i + 1; j < expected.size(); ++j) {
+      ASSERT_FALSE(sameImage(expected[i].color, expected[j].color))
+          << frames[i].name << " and " << frames[j].name << " have the same colour image";
+    }
+  }
   int matched = 0;
+  int previous = -1;  // folder index of the previous colour image (in stamp order)
+  ros::Time previous_stamp;
   for (const auto& color : received.color) {
     EXPECT_EQ(color.header.frame_id, "test_optical_frame");
     EXPECT_EQ(color.encoding, "bgr8");
     EXPECT_GT(color.header.stamp.toSec(), 0.0);
+    const cv::Mat color_mat = dasp_ros::toColorMat(color);
+    int index = -1;
+    for (std::size_t i = 0; i < expected.size() && index < 0; ++i) {
+      if (sameImage(color_mat, expected[i].color)) index = static_cast<int>(i);
+    }
+    ASSERT_GE(index, 0) << "colour image stamped " << color.header.stamp
+                        << " is none of the folder's";
+    // Folder order, looping, with increasing stamps.
+    if (previous >= 0) {
+      EXPECT_EQ(index, (previous + 1) % static_cast<int>(frames.size()))
+          << "after " << frames[static_cast<std::size_t>(previous)].name;
+      EXPECT_GT(color.header.stamp, previous_stamp);
+    }
+    previous = index;
+    previous_stamp = color.header.stamp;
     const auto depth = depth_by_stamp.find(color.header.stamp);
     if (depth == depth_by_stamp.end()) continue;  // subscription started between the two
     EXPECT_EQ(depth->second->header.frame_id, "test_optical_frame");
     EXPECT_EQ(depth->second->encoding, "16UC1");
-    // The images equal the files of the frame with that sequence number (frames loop).
-    const auto& paths = frames[color.header.seq % frames.size()];
-    const dasp::RgbdFrame expected = dasp::loadRgbdFrame(paths);
-    EXPECT_TRUE(sameImage(dasp_ros::toColorMat(color), expected.color)) << paths.name;
-    EXPECT_TRUE(sameImage(dasp_ros::toDepthMat(*depth->second), expected.depth)) << paths.name;
+    const auto& name = frames[static_cast<std::size_t>(index)].name;
+    EXPECT_TRUE(sameImage(dasp_ros::toDepthMat(*depth->second),
+                          expected[static_cast<std::size_t>(index)].depth))
+        << name;
     ++matched;
   }
   EXPECT_GE(matched, 2);

@@ -414,7 +414,7 @@ TEST_F(SegmentationNodes, SdaspReportsLabelsThatDoNotMatchTheirSuperpixelArray) 
   injected_labels_pub_.publish(labels21);
   EXPECT_TRUE(waitFor(
       [&] {
-        return logged({"/camera/injected/superpixels", "has no superpixel"});
+        return logged({"/camera/injected/superpixels", "do not index the"});
       },
       6.0))
       << logText();

@@ -4,7 +4,8 @@
 // file and re-timed to the rate on the wall clock, and measures
 //  - pose latency: receive time of each `pose` minus its stamp (= the last event of the update;
 //    an upper bound of publication - stamp by the loopback transport),
-//  - messages the filter lost (its diagnostics: header.seq gaps) and poses received,
+//  - messages the filter lost (sent here minus received by the filter, from its diagnostics;
+//    header.seq gaps would not do: roscpp renumbers seq per publisher) and poses received,
 //  - the filter's events per second of processing (its diagnostics) against the core
 //    EventSlam2d / EventParticleFilter run in this process on the same events (same N, B, K).
 // Prints one result line per quantity.
@@ -132,8 +133,10 @@ int main(int argc, char** argv) {
               rate, message_rate, duration, sent, messages);
   std::printf("poses received %zu; latency median %.2f ms, p99 %.2f ms, max %.2f ms\n",
               sorted.size(), 1e3 * quantile(0.5), 1e3 * quantile(0.99), 1e3 * quantile(1.0));
-  std::printf("filter: messages %s, lost (seq gaps) %s, events received %s, events processed %s\n",
-              diagnostics["messages"].c_str(), diagnostics["messages lost (sequence gaps)"].c_str(),
+  const long long received = std::atoll(diagnostics["messages"].c_str());
+  std::printf("filter: messages %s, lost (sent - received) %lld, events received %s, events "
+              "processed %s\n",
+              diagnostics["messages"].c_str(), static_cast<long long>(messages) - received,
               diagnostics["events received"].c_str(), diagnostics["events processed"].c_str());
   const double node_rate = std::atof(diagnostics["events per second of processing"].c_str());
   const double core_rate = static_cast<double>(core_events.size()) / core_s;

@@ -220,7 +220,7 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
     }
     const ebslam::PinholeCamera& c = config_.sensors.depth;
     if (static_cast<int>(image.width) != c.width || static_cast<int>(image.height) != c.height ||
-        image.step < image.width * bytes ||
+        image.step < image.width * bytes || image.step % bytes != 0 ||
         image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
       ++rejected_size_;
       ++bad_input_seen_;
@@ -326,7 +326,6 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
                    msg.header.frame_id.c_str(), config_.edvs_frame.c_str());
     }
     ebslam_msgs::DepthEventArray out;
-    out.header.seq = msg.header.seq;
     out.header.stamp = msg.header.stamp;
     out.header.frame_id = config_.edvs_frame;
     out.width = msg.width;

@@ -25,6 +25,7 @@ namespace ebslam_ros {
 class EventRendererNodelet : public nodelet::Nodelet {
  private:
   static constexpr double kWarnPeriodS = 5.0;
+  static constexpr std::uint32_t kMaxSide = 4096;  // [px]
 
   void onInit() override {
     try {
@@ -44,9 +45,13 @@ class EventRendererNodelet : public nodelet::Nodelet {
   void onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (msg->events.empty()) return;
-    if (msg->width == 0 || msg->height == 0 || msg->width > 65535 || msg->height > 65535) {
-      NODELET_ERROR_THROTTLE(kWarnPeriodS, "EventArray of a %ux%u sensor ignored", msg->width,
-                             msg->height);
+    // Bounded so that the rendered image stays small (4096 x 4096 bgr8 = 48 MiB): a bogus size
+    // such as 65535 x 65535 would make render() allocate 12 GiB.
+    if (msg->width == 0 || msg->height == 0 || msg->width > kMaxSide || msg->height > kMaxSide) {
+      NODELET_ERROR_THROTTLE(kWarnPeriodS,
+                             "EventArray of a %ux%u sensor ignored: width and height must be in "
+                             "1..%u",
+                             msg->width, msg->height, kMaxSide);
       return;
     }
     if (msg->width != width_ || msg->height != height_) {

@@ -51,6 +51,8 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/EventSlam3dKnobsConfig.h"
+#include "ebslam_ros/event_input.h"
+#include "ebslam_ros/log_throttle.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
@@ -122,13 +124,6 @@ geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& t, const
   msg.transform.rotation = pose.orientation;
   return msg;
 }
-
-/// Events of one message between two restarts of the stream.
-struct PointSegment {
-  ebslam::PointEventVector events;
-  bool restart = false;           // time jumped back before it: reset the filter first
-  std::int64_t jump_back_us = 0;  // [us]
-};
 
 struct Voxel {
   Eigen::Vector3f centre;  // [m] in the map frame
@@ -251,52 +246,40 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     return false;
   }
 
-  /// Splits a message into time-ordered segments of valid events (see the README's bad input).
-  std::vector<PointSegment> takeEvents(const ebslam_msgs::DepthEventArray& msg) {
-    const auto max_backward_us =
-        static_cast<std::int64_t>(std::llround(config_.max_backward_s * 1e6));
-    const auto gap_us = static_cast<std::int64_t>(std::llround(config_.gap_warning_s * 1e6));
-    std::vector<PointSegment> segments(1);
-    segments.back().events.reserve(msg.events.size());
-    bool first = true;
-    std::size_t no_depth = 0;
-    for (const ebslam_msgs::DepthEvent& e : msg.events) {
-      if (!std::isfinite(e.depth) || !std::isfinite(e.point.x) || !std::isfinite(e.point.y) ||
-          !std::isfinite(e.point.z)) {
-        ++no_depth;
-        continue;
+  /// Splits a message into time-ordered segments of valid events (see the README's bad input)
+  /// and logs what it dropped (throttled on the wall clock).
+  std::vector<DepthEventSegment> takeEvents(const ebslam_msgs::DepthEventArray& msg) {
+    DepthEventInputResult input =
+        guard_.take(msg, static_cast<std::int64_t>(std::llround(config_.max_backward_s * 1e6)),
+                    static_cast<std::int64_t>(std::llround(config_.gap_warning_s * 1e6)));
+    clamped_ += input.clamped;
+    if (input.gap_us > 0) {
+      ++gaps_;
+      if (gap_log_.due()) {
+        NODELET_WARN(
+            "no depth events for %.3f s: the filter continues from its last pose (call `reset` "
+            "if the sensor was moved meanwhile)",
+            1e-6 * static_cast<double>(input.gap_us));
       }
-      std::int64_t t_us = ebslam_msgs::toMicroseconds(e.ts);
-      if (last_t_us_ != kNoTime) {
-        if (t_us < last_t_us_) {
-          if (last_t_us_ - t_us <= max_backward_us) {
-            t_us = last_t_us_;  // sensor and transport jitter
-            ++clamped_;
-          } else {
-            if (!segments.back().events.empty()) segments.emplace_back();
-            segments.back().restart = true;
-            segments.back().jump_back_us = last_t_us_ - t_us;
-          }
-        } else if (first && t_us - last_t_us_ > gap_us) {
-          ++gaps_;
-          NODELET_WARN_THROTTLE(kWarnPeriodS,
-                                "no depth events for %.3f s: the filter continues from its last "
-                                "pose (call `reset` if the sensor was moved meanwhile)",
-                                1e-6 * static_cast<double>(t_us - last_t_us_));
-        }
-      }
-      first = false;
-      last_t_us_ = t_us;
-      segments.back().events.push_back({t_us, Eigen::Vector3f(e.point.x, e.point.y, e.point.z)});
     }
-    if (no_depth > 0) {
+    if (input.zero_time > 0) {
+      zero_time_ += input.zero_time;
+      ++bad_input_seen_;
+      if (zero_time_log_.due()) {
+        NODELET_ERROR("dropped %zu depth events stamped 0 (unset event time) (%llu messages with "
+                      "them since the previous such message not logged)",
+                      input.zero_time,
+                      static_cast<unsigned long long>(zero_time_log_.suppressed()));
+      }
+    }
+    if (input.no_depth > 0) {
       // Normal for a D-eDVS (pixels the depth sensor does not see): not a warning.
-      no_depth_ += no_depth;
-      NODELET_INFO_THROTTLE(kWarnPeriodS, "skipped %zu events without depth (NaN point or depth)",
-                            no_depth);
+      no_depth_ += input.no_depth;
+      if (no_depth_log_.due()) {
+        NODELET_INFO("skipped %zu events without depth (NaN point or depth)", input.no_depth);
+      }
     }
-    if (segments.back().events.empty()) segments.pop_back();
-    return segments;
+    return std::move(input.segments);
   }
 
   void onEvents(const ebslam_msgs::DepthEventArray::ConstPtr& msg) {
@@ -304,10 +287,6 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     const auto wall_start = std::chrono::steady_clock::now();
     ++messages_;
     events_in_ += msg->events.size();
-    if (last_seq_ && msg->header.seq > *last_seq_ + 1) {
-      dropped_messages_ += msg->header.seq - *last_seq_ - 1;
-    }
-    last_seq_ = msg->header.seq;
     if (msg->events.empty()) {
       ++empty_messages_;
       NODELET_INFO_THROTTLE(kWarnPeriodS, "empty DepthEventArray messages ignored (%lu so far)",
@@ -326,17 +305,21 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       ++waiting_for_mount_;
       return;
     }
-    std::vector<PointSegment> segments = takeEvents(*msg);
-    for (PointSegment& segment : segments) {
+    std::vector<DepthEventSegment> segments = takeEvents(*msg);
+    for (DepthEventSegment& segment : segments) {
       if (segment.restart) {
         ++restarts_;
         ++bad_input_seen_;
-        // Not throttled: a restart is rare, and throttling on ROS time would hide every loop of
-        // a bag after the first (the same stamps come back).
-        NODELET_WARN(
-            "depth event time jumped back by %.3f s (a looping bag or a sensor reconnect?): "
-            "filter restarted at ~initial_pose with an empty map",
-            1e-6 * static_cast<double>(segment.jump_back_us));
+        // Throttled on the wall clock: a stream stepping back in every message must not log
+        // with every message, and ROS-time throttling would hide the loops of a bag.
+        if (restart_log_.due()) {
+          NODELET_WARN(
+              "depth event time jumped back by %.3f s (a looping bag or a sensor reconnect?): "
+              "filter restarted at ~initial_pose with an empty map (%llu restarts since the "
+              "previous such message not logged: at most one per %.0f s)",
+              1e-6 * static_cast<double>(segment.jump_back_us),
+              static_cast<unsigned long long>(restart_log_.suppressed()), restart_log_.period());
+        }
         slam_.reset();
         path_.clear();
       }
@@ -498,7 +481,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     slam_.reset();  // restarts with the next events
     path_.clear();
-    last_t_us_ = kNoTime;
+    guard_.restart();
     last_stamp_us_ = kNoTime;
     response.success = true;
     response.message = "filter restarts at ~initial_pose with an empty map with the next events";
@@ -573,12 +556,12 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     status.add("messages", messages_);
     status.add("events received", events_in_);
     status.add("events processed", processed_);
-    status.add("messages lost (sequence gaps)", dropped_messages_);
     status.add("empty messages", empty_messages_);
     status.add("messages in a wrong frame", rejected_frame_);
     status.add("events without depth", no_depth_);
     status.add("events out of range", out_of_range_);
     status.add("events clamped in time", clamped_);
+    status.add("events stamped 0 (dropped)", zero_time_);
     status.add("restarts after time jumps", restarts_);
     status.add("pauses longer than gap_warning", gaps_);
     status.add("processing time [s]", processing_s_);
@@ -604,7 +587,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
   std::optional<Eigen::Isometry3d> mount_;                          // base_link -> sensor
   std::mutex mutex_;
   std::unique_ptr<ebslam::EventSlam3d> slam_;  // null until events arrive (or after a reset)
-  std::int64_t last_t_us_ = kNoTime;           // last event's time in the stream [us]
+  DepthEventInputGuard guard_;                 // the stream's time and its checks
   std::int64_t last_stamp_us_ = kNoTime;       // stamp of the last pose [us]
 
   ros::Subscriber events_sub_;
@@ -625,9 +608,11 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
   // Counters for diagnostics (since start).
   std::uint64_t messages_ = 0, events_in_ = 0, processed_ = 0, empty_messages_ = 0,
                 rejected_frame_ = 0, no_depth_ = 0, out_of_range_ = 0, clamped_ = 0, restarts_ = 0,
-                gaps_ = 0, dropped_messages_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0;
+                gaps_ = 0, zero_time_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0;
+  // Per-message problems, logged at most every kWarnPeriodS of wall time.
+  WallThrottle restart_log_{kWarnPeriodS}, gap_log_{kWarnPeriodS}, zero_time_log_{kWarnPeriodS},
+      no_depth_log_{kWarnPeriodS};
   std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
-  std::optional<std::uint32_t> last_seq_;
   double processing_s_ = 0.0;
   double last_latency_s_ = 0.0;
 };

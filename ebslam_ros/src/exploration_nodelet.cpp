@@ -237,6 +237,9 @@ class ExplorationNodelet : public nodelet::Nodelet {
       case ebslam::ExplorationState::kBackingOut:
         NODELET_DEBUG("%s", text.c_str());
         break;
+      case ebslam::ExplorationState::kRelocalising:
+        if (due(stuck_warned_) || changed) NODELET_WARN("%s", text.c_str());
+        break;
       case ebslam::ExplorationState::kExploring:
         if (changed) NODELET_INFO("%s", text.c_str());
         break;

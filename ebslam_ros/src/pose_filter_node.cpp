@@ -166,10 +166,6 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
   const auto wall_start = std::chrono::steady_clock::now();
   ++messages_;
   events_in_ += msg->events.size();
-  if (last_seq_ && msg->header.seq > *last_seq_ + 1) {
-    dropped_messages_ += msg->header.seq - *last_seq_ - 1;
-  }
-  last_seq_ = msg->header.seq;
   if (msg->events.empty()) {
     ++empty_messages_;
     return;
@@ -204,21 +200,46 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
                       name_.c_str(), input.outside, msg->width, msg->height);
   }
   if (input.clamped > 0) clamped_ += input.clamped;
+  if (input.zero_time > 0) {
+    zero_time_ += input.zero_time;
+    ++bad_input_seen_;
+    if (zero_time_log_.due()) {
+      ROS_ERROR("%s: dropped %zu events stamped 0 (unset event time: does the source fill "
+                "Event.ts?); %llu messages with them since the previous such message not logged",
+                name_.c_str(), input.zero_time,
+                static_cast<unsigned long long>(zero_time_log_.suppressed()));
+    }
+  }
   if (input.gap_us > 0) {
     ++gaps_;
-    ROS_WARN_THROTTLE(kWarnPeriodS, "%s: no events for %.3f s", name_.c_str(),
-                      1e-6 * static_cast<double>(input.gap_us));
+    if (gap_log_.due()) {
+      constexpr double kDayS = 86400.0;
+      const double gap_s = 1e-6 * static_cast<double>(input.gap_us);
+      if (gap_s > kDayS) {
+        ROS_WARN("%s: event time jumped forward by %.0f s (a bad stamp or a clock change?); "
+                 "the filter continues from its last pose",
+                 name_.c_str(), gap_s);
+      } else {
+        ROS_WARN("%s: no events for %.3f s; the filter continues from its last pose",
+                 name_.c_str(), gap_s);
+      }
+    }
   }
   for (EventSegment& segment : input.segments) {
     if (segment.restart) {
       ++restarts_;
       ++bad_input_seen_;
-      // Not throttled: a restart is rare, and throttling on ROS time would hide every loop of
-      // a bag after the first (the same stamps come back).
-      ROS_WARN(
-          "%s: event time jumped back by %.3f s (a looping bag or a sensor "
-          "reconnect?): filter restarted at the initial pose",
-          name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us));
+      // Throttled on the wall clock: a stream stepping back in every message would otherwise
+      // log with every message, and ROS-time throttling would hide the loops of a bag (the same
+      // stamps come back). The count says how many restarts the log did not show.
+      if (restart_log_.due()) {
+        ROS_WARN(
+            "%s: event time jumped back by %.3f s (a looping bag or a sensor reconnect?): "
+            "filter restarted at the initial pose (%llu restarts since the previous such message "
+            "not logged: at most one per %.0f s; diagnostics count them all)",
+            name_.c_str(), 1e-6 * static_cast<double>(segment.jump_back_us),
+            static_cast<unsigned long long>(restart_log_.suppressed()), restart_log_.period());
+      }
       backend_.reset();
       start_pose_ = config_.initial_pose;
       if (denoiser_) denoiser_->reset();
@@ -419,12 +440,12 @@ void PoseFilterNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& statu
   status.add("messages", messages_);
   status.add("events received", events_in_);
   status.add("events processed", backend_ ? backend_->processedEvents() : 0);
-  status.add("messages lost (sequence gaps)", dropped_messages_);
   status.add("empty messages", empty_messages_);
   status.add("messages of a wrong sensor size", rejected_size_);
   status.add("messages in a wrong frame", rejected_frame_);
   status.add("events outside the sensor", outside_);
   status.add("events clamped in time", clamped_);
+  status.add("events stamped 0 (dropped)", zero_time_);
   status.add("restarts after time jumps", restarts_);
   status.add("denoiser", config_.denoise ? "on" : "off");
   status.add("events passed by the denoiser", denoiser_passed_);

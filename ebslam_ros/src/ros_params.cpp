@@ -627,7 +627,11 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
   e.alpha = param<double>(nh, "alpha", e.alpha);
   e.planner_max_nodes = param<int>(nh, "planner_max_nodes", e.planner_max_nodes);
   e.planner_time_budget_s = param<double>(nh, "planner_time_budget", e.planner_time_budget_s);
-  e.keep_clear_of_blocked = param<bool>(nh, "keep_clear_of_blocked", e.keep_clear_of_blocked);
+  e.near_blocked_cost = param<double>(nh, "near_blocked_cost", e.near_blocked_cost);
+  e.oscillation_window = param<int>(nh, "oscillation_window", e.oscillation_window);
+  e.oscillation_max_cells = param<int>(nh, "oscillation_max_cells", e.oscillation_max_cells);
+  e.commit_min_cells = param<int>(nh, "commit_min_cells", e.commit_min_cells);
+  e.escape_blocked_cost = param<double>(nh, "escape_blocked_cost", e.escape_blocked_cost);
   e.min_path_cells = param<int>(nh, "min_path_cells", e.min_path_cells);
   e.max_path_cells = param<int>(nh, "max_path_cells", e.max_path_cells);
   e.waypoint_tolerance_m = param<double>(nh, "waypoint_tolerance", e.waypoint_tolerance_m);

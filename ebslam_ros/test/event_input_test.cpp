@@ -78,4 +78,25 @@ TEST(EventInput, ReportsAPause) {
   EXPECT_FALSE(guard.take(array({event(kBase, 1, 1)})).segments[0].restart);
 }
 
+// An event stamped 0 (unset) amid a stream is dropped and counted: no restart, and the next
+// real event is no pause of 1.7e9 s.
+TEST(EventInput, DropsEventsOfTimeZero) {
+  EventInputGuard guard({128, 128}, 1000, 1000000);
+  guard.take(array({event(kBase, 1, 1)}));
+  const EventInputResult r = guard.take(array({event(kBase + 10, 1, 1), event(0, 2, 2),
+                                               event(kBase + 20, 3, 3)}));
+  EXPECT_EQ(r.zero_time, 1u);
+  EXPECT_EQ(r.gap_us, 0);
+  ASSERT_EQ(r.segments.size(), 1u);
+  EXPECT_FALSE(r.segments[0].restart);
+  ASSERT_EQ(r.segments[0].events.size(), 2u);
+  const EventInputResult alone = guard.take(array({event(0, 4, 4)}));
+  EXPECT_EQ(alone.zero_time, 1u);
+  EXPECT_TRUE(alone.segments.empty());
+  const EventInputResult next = guard.take(array({event(kBase + 30, 1, 1)}));
+  EXPECT_EQ(next.gap_us, 0);
+  ASSERT_EQ(next.segments.size(), 1u);
+  EXPECT_FALSE(next.segments[0].restart);
+}
+
 }  // namespace

@@ -413,6 +413,7 @@ TEST_F(EventSlam3dTest, BadInputIsReportedAndHandled) {
             back + scene().events[indexOf(1.0) - 1].t_us);
   expectNearTruth(back, 0.05, 3.0 * M_PI / 180.0);
   const std::size_t poses_before = poses_.size();
+  const long long messages_before = count(diagnostics(), "messages");
 
   // Empty message and a message in another frame: no pose.
   ebslam_msgs::DepthEventArray empty;
@@ -429,7 +430,10 @@ TEST_F(EventSlam3dTest, BadInputIsReportedAndHandled) {
     e.point.x = e.point.y = e.point.z = std::numeric_limits<float>::quiet_NaN();
   }
   events_pub_.publish(nans);
-  ros::WallDuration(1.0).sleep();
+  // Positive signal: the node's message counter includes the three (it counts a message and
+  // publishes its poses under one lock, before the diagnostics that show the count).
+  EXPECT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return count(diagnostics(), "messages") >= messages_before + 3; }, 60.0));
   ros::spinOnce();
   EXPECT_EQ(poses_.size(), poses_before);
 

@@ -31,7 +31,13 @@ class PipelineSystemTest(unittest.TestCase):
         rospy.Subscriber("/camera/superpixels", SuperpixelArray, self.store(self.superpixels), queue_size=50)
         rospy.Subscriber("/camera/segmentation", Segmentation, self.store(self.segmentations), queue_size=50)
         rospy.Subscriber("/ebslam/pose", PoseWithCovarianceStamped, self.store(self.poses), queue_size=5000)
-        rospy.Subscriber("/ground_truth/pose", PoseStamped, self.store(self.truth), queue_size=5000)
+        rospy.Subscriber("/ground_truth/pose", PoseStamped, self.store_truth, queue_size=5000)
+        self.last_truth_wall = time.monotonic()
+
+    def store_truth(self, msg):
+        with self.lock:
+            self.truth.append(msg)
+            self.last_truth_wall = time.monotonic()
 
     def store(self, target):
         def callback(msg):
@@ -45,7 +51,17 @@ class PipelineSystemTest(unittest.TestCase):
         deadline = time.monotonic() + rospy.get_param("~timeout", 240.0)
         while not rospy.is_shutdown() and len(self.segmentations) < 24 and time.monotonic() < deadline:
             time.sleep(0.5)
-        time.sleep(3.0)
+        # Then the poses catch up with the end of the bag: the ground truth has stopped (the bag
+        # ended) and the newest pose is as late as the newest ground truth, within a message.
+        def caught_up():
+            with self.lock:
+                if not self.poses or not self.truth:
+                    return False
+                quiet = time.monotonic() - self.last_truth_wall > 1.0
+                return quiet and (self.poses[-1].header.stamp.to_sec()
+                                  >= self.truth[-1].header.stamp.to_sec() - 0.05)
+        while not rospy.is_shutdown() and not caught_up() and time.monotonic() < deadline:
+            time.sleep(0.1)
         with self.lock:
             superpixels, segmentations = list(self.superpixels), list(self.segmentations)
             poses, truth = list(self.poses), list(self.truth)

@@ -12,7 +12,11 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
+#include <nodelet/NodeletList.h>
+#include <nodelet/NodeletLoad.h>
+#include <ros/package.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/Image.h>
 #include <tf2/utils.h>
 #include <tf2_ros/transform_listener.h>
@@ -20,6 +24,7 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -240,13 +245,13 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   events_pub_.publish(outside);
   // Sensor size changes mid-stream: the message is dropped.
   events_pub_.publish(makeEvents(t, 100, 20, 240));
-  ros::WallDuration(0.3).sleep();
-  ros::spinOnce();
-  EXPECT_EQ(poses_.size(), before);
-  // Mixed: some events outside, the rest processed.
+  // Mixed: some events outside, the rest processed. Its pose is the positive signal that the
+  // node has handled the three messages before it (one connection keeps their order): had any
+  // of them given a pose, it would be here too.
   ebslam_msgs::EventArray mixed = makeEvents(t, 2000, 5);
   for (std::size_t i = 0; i < mixed.events.size(); i += 10) mixed.events[i].y = 128;
   ASSERT_TRUE(publishAndAwait(mixed));
+  EXPECT_EQ(poses_.size(), before + 1) << "a dropped message gave a pose";
   t += 10000;
   t = feed(t, 2);
   expectNear(poses_.back().pose.pose, kStartX, kStartY, kStartTheta, 0.05);
@@ -290,6 +295,49 @@ TEST_F(PoseFilterTest, BadInputIsDroppedAndTheFilterRunsOn) {
   EXPECT_EQ(values["events outside the sensor"], std::to_string(100 + 200));
   EXPECT_EQ(values["events clamped in time"], "1");
   EXPECT_EQ(values["pauses longer than gap_warning"], "1");
+}
+
+// event_particle_filter_moving.test: the sensor moves along a known path (0.6 m forward, 0.3 m
+// sideways and 0.45 rad of turn in 3 s) and every event fires at a pixel that sees a line at the
+// pose of its time. The estimate must follow the path: a node that ignored its events, or only
+// held the start pose, is 0.67 m off at the end.
+TEST_F(PoseFilterTest, TracksAMovingSensor) {
+  constexpr double kVx = 0.2, kVy = 0.1, kOmega = 0.15;  // [m/s], [m/s], [rad/s] in the map
+  constexpr double kDuration = 3.0;                      // [s]
+  const auto truth = [&](double t) {
+    return std::array<double, 3>{kStartX + kVx * t, kStartY + kVy * t, kStartTheta + kOmega * t};
+  };
+  const std::int64_t t0 = g_next_t;
+  std::map<std::int64_t, std::array<double, 3>> truth_at;  // last event [us] -> pose
+  const int messages = static_cast<int>(kDuration / 0.01);
+  for (int k = 0; k < messages; ++k) {
+    const double t = 0.01 * k;
+    const auto pose = truth(t);
+    pixels_ = edgePixels(pose[0], pose[1], pose[2]);
+    cursor_ = 0;
+    const ebslam_msgs::EventArray msg = makeEvents(t0 + 10000 * k, 2000, 5);
+    truth_at[ebslam_msgs::toMicroseconds(msg.header.stamp)] = pose;
+    ASSERT_TRUE(publishAndAwait(msg)) << "no pose for message " << k;
+  }
+  g_next_t = t0 + 10000 * messages;
+  double worst = 0.0, worst_yaw = 0.0;
+  std::size_t compared = 0;
+  for (const auto& pose : poses_) {
+    const auto it = truth_at.find(ebslam_msgs::toMicroseconds(pose.header.stamp));
+    if (it == truth_at.end() || it->first < t0 + 500000) continue;  // after 0.5 s of motion
+    const auto& p = pose.pose.pose;
+    worst = std::max(worst, std::hypot(p.position.x - it->second[0], p.position.y - it->second[1]));
+    worst_yaw = std::max(
+        worst_yaw, std::abs(std::remainder(tf2::getYaw(p.orientation) - it->second[2], 2 * M_PI)));
+    ++compared;
+  }
+  EXPECT_GE(compared, 200u);
+  double scale = 1.0;
+  ros::param::get("~tolerance_scale", scale);
+  EXPECT_LT(worst, 0.05 * scale) << "largest position error along the path [m]";
+  EXPECT_LT(worst_yaw, 0.05 * scale) << "largest heading error along the path [rad]";
+  const auto end = truth(0.01 * (messages - 1));
+  expectNear(poses_.back().pose.pose, end[0], end[1], end[2], 0.05);
 }
 
 // ~denoise (event_particle_filter_denoise.test): the background-activity filter runs inside the
@@ -432,20 +480,52 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
 }
 
 // A map that does not exist or is not an image: the nodelet says why and does not start; the
-// manager process lives on.
+// manager process lives on. The test loads the two nodelets itself (the manager's load_nodelet
+// service), after subscribing to /rosout, so that it sees their error messages: a test that
+// only found the topics missing would pass with nodelets that never loaded.
 TEST(BadMap, NodeRefusesToStartAndLivesOn) {
   bool bad_map = false;
   ros::param::get("~bad_map", bad_map);
   if (!bad_map) GTEST_SKIP() << "only in event_particle_filter_bad_map.test";
   ros::NodeHandle nh;
-  ros::WallDuration(2.0).sleep();
-  ros::master::V_TopicInfo topics;
-  ASSERT_TRUE(ros::master::getTopics(topics));
-  for (const auto& topic : topics) {
-    EXPECT_NE(topic.name, "/missing/pose");
-    EXPECT_NE(topic.name, "/bad_format/pose");
+  std::vector<rosgraph_msgs::Log> logs;
+  auto rosout_sub = nh.subscribe<rosgraph_msgs::Log>(
+      "/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& m) { logs.push_back(*m); });
+  ASSERT_TRUE(ros::service::waitForService("/bad_map_manager/load_nodelet", ros::Duration(30.0)));
+  // Connected to the /rosout publishers of this node and of the manager.
+  ASSERT_TRUE(ebslam_ros_test::spinUntil([&] { return rosout_sub.getNumPublishers() >= 2; }, 30.0))
+      << "not connected to the manager's /rosout";
+  const std::string data = ros::package::getPath("ebslam_ros") + "/test/data/";
+  for (const std::string name : {"missing", "bad_format"}) {
+    SCOPED_TRACE(name);
+    const std::string yaml = name == "missing" ? "ceiling_missing.yaml" : "ceiling_bad_format.yaml";
+    ros::param::set("/" + name + "/map", data + yaml);
+    nodelet::NodeletLoad load;
+    load.request.name = "/" + name;
+    load.request.type = "ebslam_ros/EventParticleFilter";
+    load.request.remap_source_args = {"/" + name + "/pose"};
+    load.request.remap_target_args = {"/" + name + "/pose"};
+    // The manager answers once onInit has returned (whatever it returned).
+    ASSERT_TRUE(ros::service::call("/bad_map_manager/load_nodelet", load));
+    // Its reason, naming the map, at ERROR or FATAL from the manager's process.
+    const auto reported = [&] {
+      for (const auto& m : logs) {
+        if (m.level >= rosgraph_msgs::Log::ERROR && m.name == "/bad_map_manager" &&
+            m.msg.find(yaml) != std::string::npos) {
+          return true;
+        }
+      }
+      return false;
+    };
+    EXPECT_TRUE(ebslam_ros_test::spinUntil(reported, 30.0)) << "no error naming " << yaml;
+    // onInit has returned: a started filter would have advertised its pose by now.
+    ros::master::V_TopicInfo topics;
+    ASSERT_TRUE(ros::master::getTopics(topics));
+    for (const auto& topic : topics) EXPECT_NE(topic.name, "/" + name + "/pose");
   }
-  EXPECT_TRUE(ros::service::exists("/bad_map_manager/list", false));
+  // The manager lives on and answers.
+  nodelet::NodeletList list;
+  EXPECT_TRUE(ros::service::call("/bad_map_manager/list", list));
 }
 
 }  // namespace

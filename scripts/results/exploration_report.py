@@ -100,8 +100,8 @@ def runs_block(args, runs, layouts, seeds):
     """One line per run."""
     result = {}
     # Per run.
-    lines = ["| layout | method | seed | reachable area | covered at 5 min | covered at 10 min | time to 90 % | bumps / min | RMSE aligned | RMSE raw | max raw error | planner CPU / call |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| layout | method | seed | reachable area | covered at 5 min | covered at 10 min | time to 90 % | bumps / min | RMSE aligned | RMSE raw | max raw error | collapses detected | planner CPU / call |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for layout in layouts:
         for method in ("gain", "random"):
             for s in seeds:
@@ -112,7 +112,10 @@ def runs_block(args, runs, layouts, seeds):
 
                 def at(tq):
                     k = np.searchsorted(r["t"], tq)
-                    return f"{r['cov'][min(k, len(r['cov']) - 1)] * 100:.1f} %" if r["t"][-1] >= tq - 1 else "-"
+                    if r["t"][-1] >= tq - 1:
+                        return f"{r['cov'][min(k, len(r['cov']) - 1)] * 100:.1f} %"
+                    # A run stopped once 90 % were covered (ebslam_explore --stop-at 0.9).
+                    return ">= 90 % (stopped)" if r["cov"][-1] >= 0.9 else "-"
                 t10 = r["t"] <= args.limit
                 bumps = float(row["bumps_per_min"])
                 slam = method == "gain"
@@ -120,8 +123,9 @@ def runs_block(args, runs, layouts, seeds):
                     f"| {layout} | {method} | {s} | {float(row['reachable_area_m2']):.1f} m^2 | {at(300)} | "
                     f"{at(args.limit)} | {fmt_time(time_to(r['t'], r['cov'], 0.9))} | {bumps:.1f} | "
                     + (f"{float(row['rmse_aligned_m']) * 100:.2f} cm | {float(row['rmse_raw_m']) * 100:.2f} cm | "
-                       f"{float(row['max_error_m']) * 100:.1f} cm | {float(row['planner_ms_per_call']):.3f} ms |"
-                       if slam else "- | - | - | - |"))
+                       f"{float(row['max_error_m']) * 100:.1f} cm | {row.get('collapses', '-')} | "
+                       f"{float(row['planner_ms_per_call']):.3f} ms |"
+                       if slam else "- | - | - | - | - |"))
                 del t10
     result["runs"] = lines
     return result
@@ -193,8 +197,29 @@ def plot_curves(args, runs, layouts, seeds, fig_dir):
     return result
 
 
+def draw_covered(ax, r, plan):
+    """The covered area (ebslam_explore's covered.png: 2 cm raster from the room's lower-left
+    corner, row r at y = y_min + r * 2 cm) in light red."""
+    name = r["stem"] + "_covered.png"
+    if not os.path.exists(name):
+        return
+    covered = plt.imread(name)
+    if covered.ndim == 3:
+        covered = covered[..., 0]
+    _, walls, _ = plan
+    x0, y0 = walls.min(axis=0)
+    res = 0.02
+    rgba = np.zeros(covered.shape + (4,))
+    rgba[..., 0] = 1.0
+    rgba[..., 1] = 0.75
+    rgba[..., 2] = 0.75
+    rgba[..., 3] = (covered > 0.5) * 0.6
+    ax.imshow(rgba, origin="lower", extent=[x0, x0 + covered.shape[1] * res, y0, y0 + covered.shape[0] * res],
+              interpolation="nearest", zorder=0)
+
+
 def plot_paths(runs, layouts, seeds, plans, fig_dir):
-    """Paths, bumps and blocked cells per layout (first seed)."""
+    """Covered area, paths, bumps and blocked cells per layout (first seed)."""
     result = {}
     # Pictures like fig. 7.10 (one per layout, first seed) and fig. 7.9 (maps of the first layout).
     lines = []
@@ -205,6 +230,7 @@ def plot_paths(runs, layouts, seeds, plans, fig_dir):
             r = runs.get((layout, method, s))
             if r is None:
                 continue
+            draw_covered(ax, r, plans[layout])
             gt = np.loadtxt(r["stem"] + "_gt.tum")
             ax.plot(gt[:, 1], gt[:, 2], "r-", lw=0.6)
             if method == "gain":

@@ -76,7 +76,9 @@ macro(core_library_end name prefix)
   endif()
 
   # Tests: every test/*_test.cpp goes into one gtest binary; each TEST is one ctest test. Tests
-  # that read ../shared/data find it through <PREFIX>_SHARED_DATA_DIR and skip when it is absent.
+  # that read ../shared/data find it through <PREFIX>_SHARED_DATA_DIR; where the repository ships
+  # an excerpt of the same data (test/data/sample_session, <PREFIX>_SAMPLE_SESSION_DIR), they test
+  # the excerpt always and the full data when present, else they skip when it is absent.
   if(BUILD_TESTING)
     find_package(GTest REQUIRED)
     include(GoogleTest)
@@ -91,7 +93,8 @@ macro(core_library_end name prefix)
       get_filename_component(${prefix}_REPO_ROOT ${CMAKE_CURRENT_SOURCE_DIR}/../.. ABSOLUTE)
       target_compile_definitions(${name}_tests PRIVATE
         ${prefix}_SHARED_DATA_DIR="${${prefix}_REPO_ROOT}/../shared/data"
-        ${prefix}_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data")
+        ${prefix}_TEST_DATA_DIR="${CMAKE_CURRENT_SOURCE_DIR}/test/data"
+        ${prefix}_SAMPLE_SESSION_DIR="${${prefix}_REPO_ROOT}/test/data/sample_session")
       gtest_discover_tests(${name}_tests DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60)
     endif()
   endif()

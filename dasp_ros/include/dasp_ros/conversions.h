@@ -49,7 +49,8 @@ cv::Mat toLabelMat(const sensor_msgs::Image& image);
 /// Superpixel list -> SuperpixelArray (without edges; graph edges are added by the caller).
 ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& superpixels,
                                                   const std_msgs::Header& header);
-/// SuperpixelArray + label image message -> Superpixels (ids must index the array).
+/// SuperpixelArray + label image message -> Superpixels (ids must index the array, and every
+/// label must be -1 or index it).
 dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
                                 const sensor_msgs::Image& labels);
 

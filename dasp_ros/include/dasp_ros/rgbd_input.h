@@ -70,7 +70,13 @@ class RgbdInput {
   /// (encoding, empty or short image, sizes that differ, zero or non-finite intrinsics,
   /// camera_info of another size, no valid depth pixel).
   dasp::RgbdFrame convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
-                          const sensor_msgs::CameraInfo& info) const;
+                          const sensor_msgs::CameraInfo& info) const {
+    return convert(color, depth, info, topics_);
+  }
+  /// As above, naming the topics colour, depth, camera_info (ROS-free: the fuzz targets run it).
+  static dasp::RgbdFrame convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
+                                 const sensor_msgs::CameraInfo& info,
+                                 const std::array<std::string, 3>& topics);
 
   /// Empty while frames match; otherwise why they do not, e.g. which input has been silent for
   /// how long while the others arrive. Call about once a second.

@@ -257,7 +257,8 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
 /// The Exploration nodelet (thesis 7.4): the explorer's parameters under their core names
 /// (ebslam::ExplorationConfig, units in its comments: ~hex_spacing [m], ~grid_extent [m],
 /// ~robot_radius [m], ~bump_cone_depth [m], ~bump_cone_half_angle [rad], ~weight_z, ~weight_e,
-/// ~alpha, ~planner_max_nodes, ~planner_time_budget [s], ~keep_clear_of_blocked,
+/// ~alpha, ~planner_max_nodes, ~planner_time_budget [s], ~near_blocked_cost, ~oscillation_window,
+/// ~oscillation_max_cells, ~commit_min_cells, ~escape_blocked_cost,
 /// ~min_path_cells, ~max_path_cells, ~waypoint_tolerance [m], ~lookahead [m], ~turn_in_place
 /// [rad], ~heading_gain [1/s], ~max_speed [m/s], ~max_turn_rate [rad/s], ~backout_time [s],
 /// ~backout_speed [m/s], ~max_bumps_in_a_row, ~pose_timeout [s], ~pose_jump [m],

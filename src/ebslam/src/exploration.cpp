@@ -100,6 +100,15 @@ void ExplorationConfig::validate() const {
   if (!(std::isfinite(weight_e) && weight_e >= 0.0)) fail("weight_e must be >= 0");
   if (!positive(alpha)) fail("alpha must be positive");
   if (planner_max_nodes < 1) fail("planner_max_nodes must be >= 1");
+  if (!(std::isfinite(near_blocked_cost) && near_blocked_cost >= 0.0)) {
+    fail("near_blocked_cost must be >= 0");
+  }
+  if (!(std::isfinite(escape_blocked_cost) && escape_blocked_cost >= 0.0)) {
+    fail("escape_blocked_cost must be >= 0");
+  }
+  if (oscillation_window < 0) fail("oscillation_window must be >= 0");
+  if (oscillation_max_cells < 1) fail("oscillation_max_cells must be >= 1");
+  if (commit_min_cells < 1) fail("commit_min_cells must be >= 1");
   if (!positive(planner_time_budget_s)) fail("planner_time_budget_s must be positive");
   if (min_path_cells < 1) fail("min_path_cells must be >= 1");
   if (max_path_cells < min_path_cells) fail("max_path_cells must be >= min_path_cells");
@@ -108,6 +117,12 @@ void ExplorationConfig::validate() const {
   if (!(std::isfinite(lookahead_m) && lookahead_m >= 0.0)) fail("lookahead_m must be >= 0");
   if (!positive(heading_gain)) fail("heading_gain must be positive");
   if (!positive(max_speed_mps)) fail("max_speed_mps must be positive");
+  if (!(std::isfinite(relocalise_speed_mps) && relocalise_speed_mps >= 0.0)) {
+    fail("relocalise_speed_mps must be >= 0");
+  }
+  if (!(std::isfinite(relocalise_timeout_s) && relocalise_timeout_s >= 0.0)) {
+    fail("relocalise_timeout_s must be >= 0");
+  }
   if (!positive(max_turn_rate_rps)) fail("max_turn_rate_rps must be positive");
   if (!positive(backout_time_s)) fail("backout_time_s must be positive");
   if (!positive(backout_speed_mps)) fail("backout_speed_mps must be positive");
@@ -127,7 +142,9 @@ ExplorationPlanner::ExplorationPlanner(const ExplorationConfig& config,
   e_.assign(n, 0.0f);
   gain_.assign(n, 0.0f);
   blocked_.assign(n, 0);
+  near_blocked_.assign(n, 0);
   in_omega_.assign(n, 0);
+  closed_scratch_.assign(n, 0);
 }
 
 bool ExplorationPlanner::addCoverage(const Eigen::Vector2d& position) {
@@ -174,6 +191,19 @@ void ExplorationPlanner::addBump(const Pose2& pose, double direction_robot_rad) 
       if (offset.dot(unit) >= cos_half * distance) blocked_[*cell] = 1;
     }
   }
+  near_blocked_stale_ = true;
+}
+
+void ExplorationPlanner::updateNearBlocked() {
+  if (!near_blocked_stale_) return;
+  near_blocked_stale_ = false;
+  std::fill(near_blocked_.begin(), near_blocked_.end(), 0);
+  for (int c = 0; c < grid_.size(); ++c) {
+    if (!blocked_[c]) continue;
+    for (int nb : grid_.neighbours(c)) {
+      if (nb >= 0 && !blocked_[nb]) near_blocked_[nb] = 1;
+    }
+  }
 }
 
 void ExplorationPlanner::updateLocalisationMap(const GridMap2f& normalisation) {
@@ -210,7 +240,9 @@ void ExplorationPlanner::updateLocalisationMap(const GridMap2f& normalisation) {
   }
 }
 
-void ExplorationPlanner::computeGain(int robot_cell) {
+void ExplorationPlanner::computeGain(int robot_cell) { computeGain(robot_cell, false); }
+
+void ExplorationPlanner::computeGain(int robot_cell, bool through_blocked) {
   std::fill(gain_.begin(), gain_.end(), 0.0f);
   std::fill(in_omega_.begin(), in_omega_.end(), 0);
   reachable_.clear();
@@ -220,7 +252,7 @@ void ExplorationPlanner::computeGain(int robot_cell) {
   in_omega_[robot_cell] = 1;
   for (std::size_t head = 0; head < reachable_.size(); ++head) {
     for (int nb : grid_.neighbours(reachable_[head])) {
-      if (nb < 0 || in_omega_[nb] || blocked_[nb]) continue;
+      if (nb < 0 || in_omega_[nb] || (blocked_[nb] && !through_blocked)) continue;
       in_omega_[nb] = 1;
       reachable_.push_back(nb);
     }
@@ -245,6 +277,7 @@ void ExplorationPlanner::computeGain(int robot_cell) {
   const double z_scale = z_range > 0.0 ? 1.0 / z_range : 0.0;
   const double e_scale = e_range > 0.0 ? 1.0 / e_range : 0.0;
   for (int c : reachable_) {
+    if (blocked_[c]) continue;  // Omega crossed blocked cells (escape): they promise nothing
     const double z0 = (z_[c] - z_mean) * z_scale;
     const double e0 = (e_[c] - e_mean) * e_scale;
     gain_[c] = static_cast<float>(config_.weight_z * logistic(config_.alpha, -z0) +
@@ -257,64 +290,84 @@ std::vector<int> ExplorationPlanner::plan(const Eigen::Vector2d& position) {
   last_hit_time_ = false;
   const std::optional<int> start = grid_.cellAt(position);
   if (!start) return {};
+  updateNearBlocked();
   computeGain(*start);
-  if (config_.keep_clear_of_blocked) {
-    // Cells next to a blocked cell lie within about a robot radius of an obstacle: driving
-    // through them means touching it. Avoid them, unless that leaves no path at all.
-    avoid_ = blocked_;
-    for (int c = 0; c < grid_.size(); ++c) {
-      if (!blocked_[c]) continue;
-      for (int nb : grid_.neighbours(c)) {
-        if (nb >= 0) avoid_[nb] = 1;
-      }
-    }
-    std::vector<int> path = search(*start, avoid_);
-    if (!path.empty()) return path;
-  }
-  return search(*start, blocked_);
+  SearchGoal goal;
+  goal.min_cells = config_.min_path_cells;
+  return search(*start, goal);
 }
 
-std::vector<int> ExplorationPlanner::search(int start_cell,
-                                            const std::vector<std::uint8_t>& closed_cells) {
-  const std::optional<int> start = start_cell;
+std::vector<int> ExplorationPlanner::planOutOf(const Eigen::Vector2d& position,
+                                               const std::vector<std::uint8_t>& loop_cells) {
+  last_expanded_ = 0;
+  last_hit_time_ = false;
+  const std::optional<int> start = grid_.cellAt(position);
+  if (!start || loop_cells.size() != blocked_.size()) return {};
+  updateNearBlocked();
+  computeGain(*start);
+  SearchGoal goal;
+  goal.min_cells = config_.commit_min_cells;
+  goal.exclude = &loop_cells;
+  std::vector<int> path = search(*start, goal);
+  if (!path.empty() && !loop_cells[path.back()]) return path;
+  computeGain(*start, true);
+  goal.cross_blocked = true;
+  std::vector<int> escape = search(*start, goal);
+  return escape.empty() ? path : escape;
+}
+
+std::vector<int> ExplorationPlanner::search(int start_cell, const SearchGoal& goal) {
   const auto t0 = std::chrono::steady_clock::now();
   struct Node {
     int cell;
-    int parent;  // index into nodes, -1 for the start
-    int length;  // cells after the start
-    double gain;
+    int parent;   // index into nodes, -1 for the start
+    int length;   // cells after the start
+    float cost;   // path cost [cells]: 1 per cell plus the near-blocked and escape extras
+    double gain;  // summed gain of the cells after the start
   };
   std::vector<Node> nodes;
-  nodes.push_back({*start, -1, 0, 0.0});
-  using Entry = std::pair<double, int>;  // (gain per length, node index)
+  nodes.reserve(static_cast<std::size_t>(config_.planner_max_nodes) * 3);
+  nodes.push_back({start_cell, -1, 0, 0.0f, 0.0});
+  // (gain per cost, -node index): among equal priorities the older node first, so the order
+  // does not depend on how the heap breaks ties.
+  using Entry = std::pair<double, int>;
   std::priority_queue<Entry> open;
-  std::vector<std::uint8_t> closed(static_cast<std::size_t>(grid_.size()), 0);
-  closed[*start] = 1;
+  std::vector<std::uint8_t>& closed = closed_scratch_;
+  std::fill(closed.begin(), closed.end(), 0);
+  closed[start_cell] = 1;
   open.push({0.0, 0});
   int best = -1;
   double best_score = -1.0;
-  int best_short = -1;  // best among paths shorter than min_path_cells
+  int best_short = -1;  // best among paths that miss the goal (too short or ending excluded)
   double best_short_score = -1.0;
+  const float near_cost = static_cast<float>(config_.near_blocked_cost);
+  const float escape_cost = static_cast<float>(config_.escape_blocked_cost);
   while (!open.empty() && last_expanded_ < config_.planner_max_nodes) {
-    const int index = open.top().second;
+    const int index = -open.top().second;
     open.pop();
     const Node node = nodes[static_cast<std::size_t>(index)];
     if (index != 0) {
-      if (closed[node.cell]) continue;  // reached before on a path of higher gain per length
+      if (closed[node.cell]) continue;  // reached before on a path of higher gain per cost
       closed[node.cell] = 1;
     }
     ++last_expanded_;
     if (node.length > 0) {
-      // Ties (equal gain per length) go to the longer path: more progress per plan.
-      const double score = node.gain / node.length + 1e-9 * node.length;
-      if (node.length >= config_.min_path_cells) {
+      // Ties (equal gain per cost) go to the longer path: more progress per plan.
+      const double score = node.gain / node.cost + 1e-9 * node.length;
+      const bool ends_ok = goal.exclude == nullptr || !(*goal.exclude)[node.cell];
+      if (node.length >= goal.min_cells && ends_ok) {
         if (score > best_score) {
           best_score = score;
           best = index;
         }
-      } else if (score > best_short_score) {
-        best_short_score = score;
-        best_short = index;
+      } else {
+        // Missing the goal: ending outside the excluded cells first, then by gain per cost; or
+        // the longest path (the farthest step out of a loop).
+        const double fallback = ends_ok ? 1e6 + score : node.length;
+        if (fallback > best_short_score) {
+          best_short_score = fallback;
+          best_short = index;
+        }
       }
     }
     if ((last_expanded_ & 63) == 0 &&
@@ -325,10 +378,18 @@ std::vector<int> ExplorationPlanner::search(int start_cell,
     }
     if (node.length >= config_.max_path_cells) continue;
     for (int nb : grid_.neighbours(node.cell)) {
-      if (nb < 0 || closed[nb] || closed_cells[nb]) continue;
+      if (nb < 0 || closed[nb]) continue;
+      float step = 1.0f;
+      if (blocked_[nb]) {
+        if (!goal.cross_blocked) continue;
+        step += escape_cost;
+      } else if (near_blocked_[nb]) {
+        step += near_cost;
+      }
       const double gain = node.gain + gain_[nb];
-      nodes.push_back({nb, index, node.length + 1, gain});
-      open.push({gain / (node.length + 1), static_cast<int>(nodes.size()) - 1});
+      const float cost = node.cost + step;
+      nodes.push_back({nb, index, node.length + 1, cost, gain});
+      open.push({gain / cost, -(static_cast<int>(nodes.size()) - 1)});
     }
   }
   const int chosen = best >= 0 ? best : best_short;
@@ -350,6 +411,8 @@ const char* toString(ExplorationState state) {
       return "no pose";
     case ExplorationState::kStuck:
       return "stuck";
+    case ExplorationState::kRelocalising:
+      return "relocalising";
   }
   return "unknown";
 }
@@ -365,10 +428,57 @@ std::vector<Eigen::Vector2d> Explorer::pathPoints() const {
   return points;
 }
 
+void Explorer::setLocalisationLost(bool lost, double now_s) {
+  if (lost == lost_) return;
+  lost_ = lost;
+  if (lost) {
+    lost_since_s_ = now_s;
+    ++relocalisations_;
+    state_ = ExplorationState::kRelocalising;
+    message_ = "localisation lost; driving straight back to re-localise";
+    relocalise_direction_ = -1.0;
+    path_.clear();
+    next_waypoint_ = 0;
+  } else {
+    lost_since_s_ = -1.0;
+    if (state_ == ExplorationState::kRelocalising) state_ = ExplorationState::kExploring;
+    message_ = "localisation back; replanning";
+    recent_cells_.clear();
+  }
+  need_plan_ = true;
+}
+
+bool Explorer::recordCell(int cell) {
+  const auto window = static_cast<std::size_t>(config_.oscillation_window);
+  if (window == 0) return false;
+  recent_cells_.push_back(cell);
+  if (recent_cells_.size() > window) recent_cells_.erase(recent_cells_.begin());
+  if (recent_cells_.size() < window) return false;
+  std::vector<int> distinct = recent_cells_;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  if (static_cast<int>(distinct.size()) > config_.oscillation_max_cells) return false;
+  // A loop: these cells and their neighbours (the robot's body reaches them) are not a goal.
+  loop_cells_.assign(static_cast<std::size_t>(planner_.grid().size()), 0);
+  for (int c : distinct) {
+    loop_cells_[c] = 1;
+    for (int nb : planner_.grid().neighbours(c)) {
+      if (nb >= 0) loop_cells_[nb] = 1;
+    }
+  }
+  recent_cells_.clear();
+  return true;
+}
+
 void Explorer::replan(double now_s, const Eigen::Vector2d& position,
                       const GridMap2f* normalisation) {
   if (normalisation != nullptr) planner_.updateLocalisationMap(*normalisation);
-  path_ = planner_.plan(position);
+  const std::optional<int> cell = planner_.grid().cellAt(position);
+  if (committed_ && cell && !loop_cells_[*cell] && next_waypoint_ >= path_.size() &&
+      !path_.empty()) {
+    committed_ = false;  // the committed plan was driven to its end, out of the loop
+  }
+  path_ = committed_ ? planner_.planOutOf(position, loop_cells_) : planner_.plan(position);
   next_waypoint_ = 0;
   need_plan_ = false;
   ++replans_;
@@ -467,10 +577,30 @@ VelocityCommand Explorer::update(double now_s, const std::optional<Pose2>& pose,
     message_ = "pose is back; replanning";
     need_plan_ = true;
   }
+  if (lost_ && lost_since_s_ >= 0.0 && now_s - lost_since_s_ > config_.relocalise_timeout_s) {
+    lost_since_s_ = -1.0;  // gave up: explore on the pose as it is
+    state_ = ExplorationState::kExploring;
+    message_ = "not re-localised; exploring on";
+    need_plan_ = true;
+  }
+  if (lost_ && lost_since_s_ >= 0.0) {
+    state_ = ExplorationState::kRelocalising;
+    if (bump.contact()) {
+      // Away from the contact, without marking a map cell from a pose not to be trusted.
+      relocalise_direction_ = std::cos(bump.direction_rad) >= 0.0 ? -1.0 : 1.0;
+    }
+    return {relocalise_direction_ * config_.relocalise_speed_mps, 0.0};
+  }
   const Eigen::Vector2d position(pose_->x, pose_->y);
   if (planner_.addCoverage(position)) {
     const std::optional<int> cell = planner_.grid().cellAt(position);
     if (cell && *cell != bump_cell_) bumps_in_a_row_ = 0;
+    if (cell && recordCell(*cell)) {
+      ++loops_;
+      committed_ = true;
+      need_plan_ = true;
+      message_ = "going round in a loop; committing to a plan out of it";
+    }
   }
 
   if (bump.contact()) {

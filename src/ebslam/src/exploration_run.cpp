@@ -91,14 +91,20 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
   std::optional<EventSlam2d> slam;
   std::optional<Explorer> explorer;
   std::optional<RandomBumpAndTurn> baseline;
+  std::optional<TrackingMonitor> monitor;
   if (config.random_baseline) {
-    baseline.emplace(config.exploration, config.seed);
+    // The baseline needs no localisation: it turns at the robot's full rate.
+    ExplorationConfig random_config = config.exploration;
+    random_config.max_turn_rate_rps = sim_config.robot.max_turn_rate_rps;
+    baseline.emplace(random_config, config.seed);
   } else {
     slam.emplace(
         slam_config,
         CeilingCamera(simulator.config().events.camera, simulator.config().ceiling_height_m),
         start);
     explorer.emplace(config.exploration, Eigen::Vector2d(start.x, start.y));
+    monitor.emplace(config.tracking, CeilingCamera(simulator.config().events.camera,
+                                                   simulator.config().ceiling_height_m));
   }
   CoverageRaster coverage(plan, simulator.config().robot.radius_m, config.coverage_resolution_m);
 
@@ -120,6 +126,10 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       sample.t_s = t;
       sample.covered = coverage.coveredFraction();
       sample.bumps = result.bump_events;
+      if (monitor) {
+        sample.contrast = monitor->contrast();
+        sample.lost = monitor->state() == TrackingState::kLost;
+      }
       if (slam) {
         sample.position_error_m =
             std::hypot(estimate.x - simulator.pose().x(), estimate.y - simulator.pose().y());
@@ -156,6 +166,10 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       slam->process(events);
       const Pose2 p = slam->estimate();
       result.estimate.push_back(se2ToFloorPose(simulator.time(), p.x, p.y, p.theta));
+      const TrackingState tracking = monitor->update(simulator.time(), events, p, slam->map());
+      if (config.relocalise_when_lost) {
+        explorer->setLocalisationLost(tracking == TrackingState::kLost, simulator.time());
+      }
     }
     if (bump.contact() && !was_contact) ++result.bump_events;
     was_contact = bump.contact();
@@ -174,6 +188,8 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
     result.bump_points = planner.bumpPoints();
     result.last_path = explorer->pathPoints();
     result.slam_map = mapToImage(slam->map());
+    result.collapses = monitor->collapses();
+    result.relocalisations = explorer->relocalisations();
   }
   result.covered = coverage.covered().clone();
   result.reachable = coverage.reachable().clone();

@@ -2,6 +2,8 @@
 #include <filesystem>
 #include <numeric>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -242,24 +244,31 @@ TEST(DedvsIo, RunRoundTripsThroughFiles) {
   EXPECT_THROW(readDedvsSensors("/nonexistent/sensors.yaml"), std::runtime_error);
 }
 
+// The repository's freiburg1_xyz excerpt (4.5 s, hand-held) always, freiburg1_desk too when
+// ../shared has it.
 TEST(DedvsSimulator, TumHandHeldRunInAFurnishedRoom) {
-  const std::string path = std::string(EBSLAM_SHARED_DATA_DIR) +
+  std::vector<std::string> paths{std::string(EBSLAM_SAMPLE_SESSION_DIR) +
+                                 "/freiburg1_xyz_excerpt.txt"};
+  const std::string desk = std::string(EBSLAM_SHARED_DATA_DIR) +
                            "/tum-groundtruth/rgbd_dataset_freiburg1_desk-groundtruth.txt";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "../shared/data absent: " << path;
-  const Trajectory trajectory = readTumTrajectory(path);
-  RoomSceneConfig room;
-  room.box_count = 3;
-  const Scene scene = makeRoomScene(trajectory, room);
-  EXPECT_GE(scene.planes.size(), 6u + 5u + 25u + 15u);
-  const double t0 = trajectory.front().t_s + 3.0;
-  const DedvsRun run = DedvsSimulator().simulate(scene, trajectory, t0, t0 + 0.1);
-  EXPECT_GT(run.events.size(), 1000u);
-  EXPECT_GE(run.depth_frames.size(), 3u);  // at t0 + k / 30 s, the last one at the end or not
-  EXPECT_LE(run.depth_frames.size(), 4u);
-  std::size_t with_depth = 0;
-  for (const TrueDepthEvent& e : run.events) with_depth += std::isfinite(e.depth_m);
-  EXPECT_EQ(with_depth, run.events.size());  // a closed room: every ray hits a surface
-  EXPECT_GT(cv::countNonZero(run.depth_frames[0].depth_mm), 320 * 240 / 2);
+  if (std::filesystem::exists(desk)) paths.push_back(desk);
+  for (const std::string& path : paths) {
+    SCOPED_TRACE(path);
+    const Trajectory trajectory = readTumTrajectory(path);
+    RoomSceneConfig room;
+    room.box_count = 3;
+    const Scene scene = makeRoomScene(trajectory, room);
+    EXPECT_GE(scene.planes.size(), 6u + 5u + 25u + 15u);
+    const double t0 = trajectory.front().t_s + 3.0;
+    const DedvsRun run = DedvsSimulator().simulate(scene, trajectory, t0, t0 + 0.1);
+    EXPECT_GT(run.events.size(), 1000u);
+    EXPECT_GE(run.depth_frames.size(), 3u);  // at t0 + k / 30 s, the last one at the end or not
+    EXPECT_LE(run.depth_frames.size(), 4u);
+    std::size_t with_depth = 0;
+    for (const TrueDepthEvent& e : run.events) with_depth += std::isfinite(e.depth_m);
+    EXPECT_EQ(with_depth, run.events.size());  // a closed room: every ray hits a surface
+    EXPECT_GT(cv::countNonZero(run.depth_frames[0].depth_mm), 320 * 240 / 2);
+  }
 }
 
 }  // namespace

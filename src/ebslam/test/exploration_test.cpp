@@ -153,6 +153,177 @@ TEST(ExplorationPlanner, PlansThroughOpenCellsTowardsTheUnexplored) {
   EXPECT_TRUE(planner.plan({50.0, 0.0}).empty());
 }
 
+// A pocket of blocked cells around the robot (x in [-0.6, 0.6], y in [-0.45, 0.45]) whose only
+// way out is a gap in the east wall, explored inside. Cone of 0.3 rad, 0.15 m deep.
+ExplorationPlanner pocketPlanner(double gap_half_width_m, double near_blocked_cost = 2.0) {
+  ExplorationConfig config = smallGrid();
+  config.near_blocked_cost = near_blocked_cost;
+  config.bump_cone_half_angle_rad = 0.3;
+  config.bump_cone_depth_m = 0.15;
+  ExplorationPlanner planner(config, {0.0, 0.0});
+  for (int pass = 0; pass < 5; ++pass) {
+    for (double x = -0.6; x <= 0.6; x += 0.05) {
+      for (double y = -0.45; y <= 0.45; y += 0.05) planner.addCoverage({x, y});
+    }
+  }
+  for (double x = -0.75; x <= 0.75; x += 0.05) {
+    planner.addBump({x, 0.45, kPi / 2}, 0.0);
+    planner.addBump({x, -0.45, -kPi / 2}, 0.0);
+  }
+  for (double y = -0.6; y <= 0.6; y += 0.05) {
+    planner.addBump({-0.6, y, kPi}, 0.0);
+    if (std::abs(y) >= gap_half_width_m) planner.addBump({0.6, y, 0.0}, 0.0);
+  }
+  return planner;
+}
+
+// Cells reachable from `from` through cells for which `open` holds.
+template <typename Open>
+std::vector<std::uint8_t> flood(const HexGrid& grid, int from, Open open) {
+  std::vector<std::uint8_t> seen(static_cast<std::size_t>(grid.size()), 0);
+  std::vector<int> queue{from};
+  seen[from] = 1;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    for (int nb : grid.neighbours(queue[head])) {
+      if (nb < 0 || seen[nb] || !open(nb)) continue;
+      seen[nb] = 1;
+      queue.push_back(nb);
+    }
+  }
+  return seen;
+}
+
+TEST(ExplorationPlanner, LeavesAnExploredPocketThroughAGapTheBodyFits) {
+  ExplorationPlanner planner = pocketPlanner(0.2);
+  const HexGrid& grid = planner.grid();
+  const int robot = grid.cellAt({0.0, 0.0}).value();
+  const int outside = grid.cellAt({1.5, 0.0}).value();
+  const auto& blocked = planner.blocked();
+  const auto next_to_blocked = [&](int c) {
+    for (int nb : grid.neighbours(c)) {
+      if (nb >= 0 && blocked[nb]) return true;
+    }
+    return false;
+  };
+  // The room for the test: the way out exists, but only over cells next to blocked ones (so a
+  // planner that avoids those whenever it can stays inside), and inside there is room for that.
+  ASSERT_TRUE(flood(grid, robot, [&](int c) { return !blocked[c]; })[outside]);
+  const auto clear = flood(grid, robot, [&](int c) { return !blocked[c] && !next_to_blocked(c); });
+  ASSERT_FALSE(clear[outside]);
+  ASSERT_GE(std::count(clear.begin(), clear.end(), 1), 6);
+  const std::vector<int> path = planner.plan({0.0, 0.0});
+  ASSERT_FALSE(path.empty());
+  int previous = robot;
+  for (int cell : path) {
+    const auto& n = grid.neighbours(previous);
+    EXPECT_NE(std::find(n.begin(), n.end(), cell), n.end()) << "path cells must be adjacent";
+    EXPECT_FALSE(blocked[cell]);
+    previous = cell;
+  }
+  EXPECT_GT(grid.centre(path.back()).x(), 0.7) << "the plan must leave the pocket";
+  // Avoiding cells next to blocked ones at any price (the old rule) keeps the robot inside.
+  ExplorationPlanner avoiding = pocketPlanner(0.2, 1e6);
+  const std::vector<int> trapped = avoiding.plan({0.0, 0.0});
+  ASSERT_FALSE(trapped.empty());
+  EXPECT_LT(avoiding.grid().centre(trapped.back()).x(), 0.7);
+  // Without a gap there is no way out and the plan stays inside.
+  ExplorationPlanner closed = pocketPlanner(0.0);
+  const std::vector<int> inside = closed.plan({0.0, 0.0});
+  for (int cell : inside) EXPECT_LT(closed.grid().centre(cell).x(), 0.7);
+}
+
+TEST(ExplorationPlanner, PrefersKeepingClearOfBlockedCellsWhenThatIsCheap) {
+  // A row of blocked cells north of y = 0.2; the unexplored east is reached along the row or a
+  // cell further south, which costs nothing extra: the plan keeps clear of the row.
+  ExplorationConfig config = smallGrid();
+  ExplorationPlanner planner(config, {0.0, 0.0});
+  for (int pass = 0; pass < 5; ++pass) {
+    for (double x = -2.1; x <= 0.0; x += 0.05) {
+      for (double y = -2.1; y <= 2.1; y += 0.1) planner.addCoverage({x, y});
+    }
+  }
+  for (double x = -1.8; x <= 1.8; x += 0.05) planner.addBump({x, 0.0, kPi / 2}, 0.0);
+  const std::vector<int> path = planner.plan({0.0, -0.3});
+  ASSERT_GE(path.size(), 3u);
+  int near = 0;
+  for (int cell : path) {
+    for (int nb : planner.grid().neighbours(cell)) {
+      if (nb >= 0 && planner.blocked()[nb]) {
+        ++near;
+        break;
+      }
+    }
+  }
+  EXPECT_EQ(near, 0);
+  EXPECT_GT(planner.grid().centre(path.back()).x(), 0.2);
+}
+
+TEST(Explorer, DetectsALoopOfRevisitedCellsAndCommitsToAPlanOutOfIt) {
+  ExplorationConfig config = smallGrid();
+  Explorer explorer(config, {0.0, 0.0});
+  const BumpReading none;
+  // Three cells visited in turn: a loop once oscillation_window cell changes have been seen.
+  const std::vector<Eigen::Vector2d> cycle{{0.0, 0.0}, {0.15, 0.0}, {0.075, 0.13}};
+  double t = 0.0;
+  for (int k = 0; k <= config.oscillation_window + 1; ++k) {
+    const Eigen::Vector2d& p = cycle[static_cast<std::size_t>(k) % cycle.size()];
+    explorer.update(t, Pose2{p.x(), p.y(), 0.0}, none, nullptr);
+    t += 0.6;  // slow enough to be no pose jump
+    if (k + 1 < config.oscillation_window) {
+      EXPECT_EQ(explorer.loopsDetected(), 0u) << k;
+    }
+  }
+  EXPECT_EQ(explorer.loopsDetected(), 1u);
+  EXPECT_TRUE(explorer.committed());
+  EXPECT_NE(explorer.message().find("loop"), std::string::npos) << explorer.message();
+  // The committed plan is long and ends away from the loop's cells and their neighbours.
+  const std::vector<Eigen::Vector2d> points = explorer.pathPoints();
+  ASSERT_GE(static_cast<int>(points.size()), config.commit_min_cells - 1);
+  double nearest = 1e9;
+  for (const Eigen::Vector2d& c : cycle) nearest = std::min(nearest, (points.back() - c).norm());
+  EXPECT_GT(nearest, 1.5 * config.hex_spacing_m);
+  // Normal driving (a new cell at every change) is no loop.
+  Explorer straight(config, {0.0, 0.0});
+  for (int k = 0; k < 3 * config.oscillation_window; ++k) {
+    straight.update(0.6 * k, Pose2{-1.5 + 0.05 * k, 0.0, 0.0}, none, nullptr);
+  }
+  EXPECT_EQ(straight.loopsDetected(), 0u);
+}
+
+TEST(Explorer, ReversesStraightWithoutMappingWhileTheLocalisationIsLost) {
+  ExplorationConfig config = smallGrid();
+  Explorer explorer(config, {0.0, 0.0});
+  const BumpReading none;
+  explorer.update(0.0, Pose2{}, none, nullptr);
+  explorer.setLocalisationLost(true, 0.05);
+  const std::vector<float> e_before = explorer.planner().obstacleMap();
+  VelocityCommand command = explorer.update(0.1, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kRelocalising);
+  EXPECT_EQ(command.v_mps, -config.relocalise_speed_mps);
+  EXPECT_EQ(command.omega_rps, 0.0);
+  EXPECT_EQ(explorer.planner().obstacleMap(), e_before) << "no coverage from a lost pose";
+  BumpReading rear;
+  rear.segments = 1u << 4;
+  rear.direction_rad = kPi;
+  command = explorer.update(0.15, Pose2{0.5, 0.5, 0.0}, rear, nullptr);
+  EXPECT_EQ(command.v_mps, config.relocalise_speed_mps) << "forwards after a contact behind";
+  EXPECT_EQ(explorer.bumps(), 0u) << "no blocked cells from a lost pose";
+  EXPECT_EQ(explorer.relocalisations(), 1u);
+  // Tracking is back: a new plan from the trusted pose.
+  const std::size_t replans = explorer.replans();
+  explorer.setLocalisationLost(false, 0.2);
+  command = explorer.update(0.25, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kExploring);
+  EXPECT_GT(explorer.replans(), replans);
+  // Lost for longer than relocalise_timeout_s: explores on regardless.
+  explorer.setLocalisationLost(true, 1.0);
+  explorer.update(1.0 + 0.5 * config.relocalise_timeout_s, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kRelocalising);
+  explorer.update(1.1 + config.relocalise_timeout_s, Pose2{0.5, 0.5, 0.0}, none, nullptr);
+  EXPECT_EQ(explorer.state(), ExplorationState::kExploring);
+  EXPECT_NE(explorer.message().find("not re-localised"), std::string::npos);
+}
+
 TEST(Explorer, StopsAndSaysSoWithoutAPose) {
   Explorer explorer(smallGrid(), {0.0, 0.0});
   const BumpReading none;

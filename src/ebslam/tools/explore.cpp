@@ -50,9 +50,10 @@ RunErrors runErrors(const ExplorationRunResult& r) {
 // path.csv,log.txt,slam_map.png}.
 void writeRunFiles(const std::string& stem, const ExplorationRunResult& r) {
   std::ofstream series(stem + "_series.csv");
-  series << "t_s,covered,position_error_m,bumps\n";
+  series << "t_s,covered,position_error_m,bumps,contrast,lost\n";
   for (const ExplorationSample& s : r.samples) {
-    series << s.t_s << ',' << s.covered << ',' << s.position_error_m << ',' << s.bumps << '\n';
+    series << s.t_s << ',' << s.covered << ',' << s.position_error_m << ',' << s.bumps << ','
+           << s.contrast << ',' << s.lost << '\n';
   }
   writeTumTrajectory(stem + "_gt.tum", r.ground_truth);
   if (!r.estimate.empty()) {
@@ -88,15 +89,16 @@ void reportRun(std::ofstream& summary, const std::string& layout, const std::str
           << r.reachable_area_m2 << ',' << errors.rmse_aligned << ',' << errors.rmse_raw << ','
           << errors.max_error << ',' << diverged << ',' << r.bump_events << ','
           << (duration > 0.0 ? r.bump_events * 60.0 / duration : 0.0) << ',' << r.events << ','
-          << r.wall_time_s << ',' << per_call_ms << '\n';
+          << r.wall_time_s << ',' << per_call_ms << ',' << r.collapses << ',' << r.relocalisations
+          << '\n';
   summary.flush();
   std::printf(
       "%-10s %-6s seed %d: 90%% at %6.1f s, covered %.3f of %.1f m^2, RMSE %.2f cm "
-      "(raw %.2f, max %.2f), %zu bumps, %.0f s wall, planner %.3f ms/call\n",
+      "(raw %.2f, max %.2f), %zu bumps, %zu collapses, %.0f s wall, planner %.3f ms/call\n",
       layout.c_str(), method.c_str(), seed, r.time_to_90_s,
       r.samples.empty() ? 0.0 : r.samples.back().covered, r.reachable_area_m2,
       errors.rmse_aligned * 100, errors.rmse_raw * 100, errors.max_error * 100, r.bump_events,
-      r.wall_time_s, per_call_ms);
+      r.collapses, r.wall_time_s, per_call_ms);
   std::fflush(stdout);
 }
 
@@ -136,8 +138,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--lookahead", config.exploration.lookahead_m, "pure-pursuit look-ahead [m]")
       ->capture_default_str();
-  app.add_option("--keep-clear", config.exploration.keep_clear_of_blocked,
-                 "plan around cells next to blocked cells (1/0)")
+  app.add_option("--near-blocked-cost", config.exploration.near_blocked_cost,
+                 "extra path cost of a cell next to a blocked cell [cells]")
+      ->capture_default_str();
+  app.add_option("--max-turn-rate", config.exploration.max_turn_rate_rps,
+                 "explorer's largest commanded turn rate [rad/s]")
+      ->capture_default_str();
+  app.add_option("--relocalise", config.relocalise_when_lost,
+                 "turn in place while the tracking monitor reports EB-SLAM lost (1/0)")
+      ->capture_default_str();
+  app.add_option("--lost-contrast", config.tracking.lost_contrast,
+                 "tracking monitor: averaged map contrast below which EB-SLAM is lost")
       ->capture_default_str();
   app.add_option("--backout-time", config.exploration.backout_time_s, "back-out time [s]")
       ->capture_default_str();
@@ -158,7 +169,7 @@ int main(int argc, char** argv) {
     if (new_summary) {
       summary << "layout,method,seed,duration_s,time_to_90_s,final_covered,reachable_area_m2,"
                  "rmse_aligned_m,rmse_raw_m,max_error_m,diverged,bumps,bumps_per_min,events,"
-                 "wall_s,planner_ms_per_call\n";
+                 "wall_s,planner_ms_per_call,collapses,relocalisations\n";
     }
     std::vector<bool> methods;  // false: the gain planner, true: the random baseline
     if (!baseline_only) methods.push_back(false);

@@ -293,8 +293,15 @@ std::uint64_t noiseCount(const ParserStats& stats) {
 }
 
 void EventParser::restart() {
-  // Bytes still held are lost with the stream (e.g. an event cut by a disconnect).
+  // Bytes still held are lost with the stream (e.g. an event cut by a disconnect), and so are
+  // events held for a gap judgement (flush() first to keep them).
   stats_.bytes_dropped += pendingBytes();
+  stats_.events -= staged_.size();
+  stats_.bytes_dropped += staged_.size() * static_cast<std::size_t>(minEventBytes(config_.format));
+  staged_.clear();
+  judging_gap_ = false;
+  live_from_ = 0;
+  gap_residual_known_ = false;
   unwrapper_ =
       TimestampUnwrapper(wrapPeriodUs(config_.format), config_.format == EventFormat::kDelta);
   mode_decided_ = false;
@@ -318,7 +325,7 @@ void EventParser::restart() {
 }
 
 void EventParser::restart(const ParserConfig& config) {
-  stats_.bytes_dropped += pendingBytes();
+  restart();
   ParserStats kept = stats_;
   *this = EventParser(config);
   stats_ = kept;
@@ -364,18 +371,9 @@ EventParser::Link EventParser::link(const FrameRef& a, const FrameRef& b) const 
   const std::int64_t host_elapsed = a.host_us != kNoHost && b.host_us != kNoHost
                                         ? std::max<std::int64_t>(0, b.host_us - a.host_us)
                                         : -1;
-  // Whole periods a quiet gap hid: only when the line was idle in between (no backlog), so
-  // host time is device time; rounded down with an eighth of a period of slack.
-  if (config_.infer_wraps_from_host_time && b.idle_epoch != a.idle_epoch &&
-      host_elapsed > period / 2) {
-    const std::int64_t excess = host_elapsed - step + period / 8;
-    const std::int64_t k = excess > 0 ? excess / period : 0;
-    if (k >= 1) {
-      step += k * period;
-      l.wraps += static_cast<std::uint64_t>(k);
-      l.wraps_from_host = static_cast<std::uint64_t>(k);
-    }
-  }
+  // No whole periods from host time here: an idle line followed by a burst may be a quiet
+  // device (periods hidden) or a stalled line delivering its backlog (the burst's own times
+  // carry the gap). publishFrame() judges that once the stream is live again.
   l.step_us = step;
   // A step longer than the host clock allows is a framing error, not time.
   // Without host time (a capture) only the order is known: a step of half a period or more
@@ -417,6 +415,20 @@ void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bo
   e.y = static_cast<std::uint16_t>(held_[pos] & 0x7F);
   e.x = static_cast<std::uint16_t>(held_[pos + 1] & 0x7F);
   e.polarity = ((held_[pos + 1] >> 7) & 1) == config_.on_bit;
+  const std::int64_t period = wrapPeriodUs(config_.format);
+  if (!first && !judging_gap_ && config_.infer_wraps_from_host_time &&
+      f.idle_epoch != last_.idle_epoch && f.host_us != kNoHost && last_.host_us != kNoHost &&
+      hostSpan(last_, f.host_us) + tolerance() >= period) {
+    // The line was idle for long enough to hide a wrap period: hold the events until the
+    // stream shows how much of the gap its own times explain.
+    judging_gap_ = true;
+    live_from_ = 0;
+    gap_residual_known_ = false;
+    // Latency of a live event: the floor, or before one is known the last event's (an upper
+    // bound: fewer periods are then inferred, never more).
+    gap_latency_us_ = have_latency_ ? min_latency_us_ : last_.host_us - last_time_us_;
+    ++stats_.gaps_judged;
+  }
   if (first) {
     last_time_us_ = f.raw;
   } else {
@@ -439,7 +451,75 @@ void EventParser::publishFrame(std::size_t pos, const Link& step, bool first, bo
   }
   e.t_us = last_time_us_;
   ++stats_.events;
-  out.push_back(e);
+  stageOrEmit(e, f.host_us, out);
+}
+
+void EventParser::stageOrEmit(const ebslam::Event& e, std::int64_t host_us,
+                              ebslam::EventVector& out) {
+  if (!judging_gap_) {
+    out.push_back(e);
+    return;
+  }
+  staged_.push_back(Staged{e, host_us});
+  if (host_us == kNoHost) return;
+  {
+    // How far the host clock (less the latency) is ahead of the stream's own time: whole
+    // periods the gap hid, plus the backlog still to come, plus this read's latency jitter.
+    const std::int64_t residual = host_us - gap_latency_us_ - e.t_us;
+    if (!gap_residual_known_ || residual < gap_residual_us_) gap_residual_us_ = residual;
+    gap_residual_known_ = true;
+  }
+  // Live again: over the last live_window_us of host time the device clock advanced no faster
+  // than the host clock (a backlog advances it at the line rate over the event rate).
+  const std::int64_t window = config_.live_window_us;
+  while (live_from_ + 1 < staged_.size() && staged_[live_from_ + 1].host_us != kNoHost &&
+         staged_[live_from_ + 1].host_us <= host_us - window) {
+    ++live_from_;
+  }
+  const Staged& m = staged_[live_from_];
+  if (m.host_us != kNoHost && m.host_us <= host_us - window) {
+    const std::int64_t device = e.t_us - m.event.t_us;
+    const std::int64_t host = host_us - m.host_us;
+    // The lower bound: a writer or line that hiccups in the middle of a backlog delivers
+    // nothing for a while, which is not live either.
+    if (device <= host + host / 4 + 2000 && device >= host / 2 - 2000 && resolveGap(out, false)) {
+      return;
+    }
+  }
+  if (staged_.front().host_us != kNoHost &&
+      host_us - staged_.front().host_us >= config_.max_gap_hold_us) {
+    resolveGap(out, true);
+  }
+}
+
+bool EventParser::resolveGap(ebslam::EventVector& out, bool force) {
+  if (!judging_gap_) return true;
+  const std::int64_t period = wrapPeriodUs(config_.format);
+  // The least residual belongs to the liveliest event: k periods plus its latency above the
+  // floor, which is at least -lead_tolerance_us (the device clock is never ahead of the host
+  // clock) and, for a live event, at most live_lag_us.
+  std::int64_t k = 0;
+  if (gap_residual_known_ && period > 0) {
+    const std::int64_t x = gap_residual_us_ + config_.lead_tolerance_us + 1000;
+    k = x > 0 ? x / period : 0;
+    // A live event is late by its latency jitter only; more means the newest events are still
+    // a backlog that only looked live (a writer that hiccuped): wait for better evidence.
+    if (!force && gap_residual_us_ - k * period > config_.live_lag_us) return false;
+  }
+  const std::int64_t add = k * period;
+  for (const Staged& s : staged_) {
+    ebslam::Event e = s.event;
+    e.t_us += add;
+    out.push_back(e);
+  }
+  last_time_us_ += add;
+  stats_.wraps += static_cast<std::uint64_t>(k);
+  stats_.wraps_from_host_time += static_cast<std::uint64_t>(k);
+  staged_.clear();
+  judging_gap_ = false;
+  live_from_ = 0;
+  gap_residual_known_ = false;
+  return true;
 }
 
 void EventParser::buildChains() {
@@ -471,6 +551,16 @@ void EventParser::buildChains() {
     bool best_open = p + frame + gap + frame > n;  // no successor yet, but one may still come
     std::int64_t best_advance = 0;
     std::int64_t best_end_host = a.host_us;
+    // A backlog read (the line stalled, or the reader was descheduled) holds device time that
+    // its read times do not show: a frame as far behind the host clock as the stream says may
+    // be followed by that much more device time (less host time) within one read.
+    std::int64_t lag = 0;
+    if (have_last_ && have_latency_ && a.host_us != kNoHost) {
+      std::int64_t step = a.raw - last_.raw;
+      if (step < 0) step += wrapPeriodUs(config_.format);
+      lag = std::max<std::int64_t>(
+          0, a.host_us - min_latency_us_ + config_.lead_tolerance_us - (last_time_us_ + step));
+    }
     const std::size_t last_q = std::min(p + frame + gap, n - frame);
     for (std::size_t q = p + frame; q <= last_q && q + frame <= n; ++q) {
       if (chain_length_[q] == 0) continue;
@@ -481,7 +571,7 @@ void EventParser::buildChains() {
       if (!l.ok) continue;
       const std::int64_t advance = l.step_us + chain_advance_[q];
       if (a.host_us != kNoHost && chain_end_host_[q] != kNoHost &&
-          advance > hostSpan(a, chain_end_host_[q]) + tolerance()) {
+          advance > hostSpan(a, chain_end_host_[q]) + tolerance() + lag) {
         continue;
       }
       best_score = score;
@@ -650,6 +740,20 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
   if (!chain_mode_) return 0;
   const std::size_t before = out.size();
   decideAbsolute(true, out);
+  // A read found the line idle (or the stream ended): everything the device had queued has
+  // arrived, so the newest event is live and the gap can be judged; unless the newest events
+  // were still a backlog (the device clock ran faster than the host clock over them), in which
+  // case the line only hiccuped in the middle of the backlog.
+  if (judging_gap_ && !staged_.empty()) {
+    const Staged& newest = staged_.back();
+    const Staged& m = staged_[live_from_].host_us <= newest.host_us - config_.live_window_us
+                          ? staged_[live_from_]
+                          : staged_.front();
+    const std::int64_t device = newest.event.t_us - m.event.t_us;
+    const std::int64_t host = newest.host_us - m.host_us;
+    if (device > host + host / 4 + 4000) return out.size() - before;
+  }
+  resolveGap(out, false);
   return out.size() - before;
 }
 

@@ -17,8 +17,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
 #include <random>
 #include <set>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "edvs/protocol.h"
@@ -56,7 +59,14 @@ struct NoisyLine {
   EventVector truth;  ///< events sent whole
   std::size_t garbage_runs = 0;
   std::size_t cuts = 0;
+  std::size_t hit_inside = 0;  ///< events of truth with a garbage byte between two of their bytes
+  std::size_t garbage_bytes = 0;
 };
+
+/// Where garbage goes: runs of 1..8 random bytes before an event (probability per event, as the
+/// emulator's --garbage), or single random bytes anywhere, also inside events (probability per
+/// byte of the stream).
+enum class Garbage { kRunsBeforeEvents, kBytesAnywhere };
 
 struct Outcome {
   edvs::StreamComparison comparison;
@@ -66,7 +76,8 @@ struct Outcome {
 /// Sends `events` with garbage before an event with probability `garbage` and `cuts` events cut
 /// after 1..n-1 bytes, in random reads of 1..2048 bytes; parses them with `config`.
 Outcome runNoisyLine(const EventVector& events, const ParserConfig& config, double garbage,
-                     std::size_t cuts, std::uint32_t seed, NoisyLine* line_out = nullptr) {
+                     std::size_t cuts, std::uint32_t seed, NoisyLine* line_out = nullptr,
+                     Garbage mode = Garbage::kRunsBeforeEvents) {
   std::mt19937 rng(seed);
   std::set<std::size_t> cut_at;
   while (cut_at.size() < std::min(cuts, events.size() / 2)) {
@@ -79,6 +90,25 @@ Outcome runNoisyLine(const EventVector& events, const ParserConfig& config, doub
   constexpr std::int64_t kLatencyUs = 1000;
   for (std::size_t i = 0; i < events.size(); ++i) {
     const std::int64_t host = events[i].t_us + kLatencyUs;
+    if (mode == Garbage::kBytesAnywhere) {
+      std::vector<std::uint8_t> encoded;
+      edvs::encodeEvent(events[i], config.format, previous, config.on_bit, encoded);
+      previous = events[i].t_us;
+      bool inside = false;
+      for (std::size_t b = 0; b < encoded.size(); ++b) {
+        while (std::uniform_real_distribution<double>(0, 1)(rng) < garbage) {
+          bytes.push_back(static_cast<std::uint8_t>(rng()));
+          arrival.push_back(host);
+          ++line.garbage_bytes;
+          inside = inside || b > 0;
+        }
+        bytes.push_back(encoded[b]);
+        arrival.push_back(host);
+      }
+      line.truth.push_back(events[i]);
+      if (inside) ++line.hit_inside;
+      continue;
+    }
     if (std::uniform_real_distribution<double>(0, 1)(rng) < garbage) {
       const int n = 1 + static_cast<int>(rng() % 8);
       for (int k = 0; k < n; ++k) {
@@ -230,6 +260,100 @@ TEST(NoisyLine, DeltaAndNoTimestampFormatsNeverRunBackwards) {
       EXPECT_LT(c.lostShare(), 3 * g + 0.001);
       EXPECT_LT(c.inventedShare(), 3 * g + 0.001);
       EXPECT_GT(edvs::noiseCount(o.stats), 0u);
+    }
+  }
+}
+
+namespace {
+
+/// The real event streams under ../shared/data/rpg-events (DAVIS240C, Event Camera Dataset
+/// excerpts), each mapped onto the eDVS's 128 x 128 pixels and slowed to `rate_hz` on average
+/// (their bursts, runs of equal timestamps and quiet stretches kept), one after the other.
+/// Empty when the data is absent.
+EventVector realStreams(double rate_hz) {
+  const char* names[] = {"boxes_rotation",      "boxes_translation", "dynamic_rotation",
+                         "dynamic_translation", "poster_rotation",   "poster_translation",
+                         "shapes_rotation",     "shapes_translation"};
+  EventVector all;
+  std::int64_t offset = 1000;
+  for (const char* name : names) {
+    std::ifstream in(std::string(EDVS_SHARED_DATA_DIR) + "/rpg-events/" + name + "/events.txt");
+    if (!in) return {};
+    std::vector<double> t;
+    EventVector part;
+    std::string line;
+    while (std::getline(in, line)) {
+      std::istringstream fields(line);
+      double ts = 0;
+      int x = 0, y = 0, p = 0;
+      if (!(fields >> ts >> x >> y >> p)) continue;
+      Event e;
+      e.x = static_cast<std::uint16_t>(std::min(127, x * 128 / 240));
+      e.y = static_cast<std::uint16_t>(std::min(127, y * 128 / 180));
+      e.polarity = p != 0;
+      t.push_back(ts);
+      part.push_back(e);
+    }
+    if (part.size() < 2) return {};
+    const double stretch = (static_cast<double>(part.size()) / rate_hz) / (t.back() - t.front());
+    for (std::size_t i = 0; i < part.size(); ++i) {
+      part[i].t_us = offset + static_cast<std::int64_t>((t[i] - t.front()) * stretch * 1e6);
+    }
+    offset = part.back().t_us + 1000;
+    all.insert(all.end(), part.begin(), part.end());
+  }
+  return all;
+}
+
+}  // namespace
+
+TEST(NoisyLine, GarbageBytesAnywhereMeasured) {
+  // Single garbage bytes inserted anywhere (also inside events) at 1 % and 5 % of the bytes;
+  // streams: synthetic 150 k and 5 k events/s, and the real streams at 50 k and 5 k events/s.
+  // Printed for E2, E3, E4: lost events against the share of events a garbage byte landed
+  // inside, invented events, final time error. The target of issue 43 (lost <= 1.5 x that
+  // share, invented <= 0.1 % at 1 % and <= 0.5 % at 5 %, final error < 1 ms) is NOT met yet:
+  // at 1 % about a third of the hit events come out with a wrong pixel or time (invented ~1 %),
+  // and at 5 % accepted clock jumps put the clock off and most events are lost. Checked here:
+  // time never runs backwards, and at 1 % the losses stay within 1.5 x the hit share.
+  struct Stream {
+    std::string name;
+    EventVector events;
+  };
+  std::vector<Stream> streams;
+  streams.push_back({"synthetic 150k/s", makeStream(150000, 150000.0, 201)});
+  streams.push_back({"synthetic 5k/s", makeStream(30000, 5000.0, 202)});
+  const EventVector real50 = realStreams(50000.0);
+  if (!real50.empty()) {
+    streams.push_back({"real 50k/s", real50});
+    streams.push_back({"real 5k/s", realStreams(5000.0)});
+  } else {
+    std::printf("bytes-anywhere: ../shared/data/rpg-events absent, synthetic streams only\n");
+  }
+  std::uint32_t seed = 300;
+  for (EventFormat f : {EventFormat::kAbs16, EventFormat::kAbs24, EventFormat::kAbs32}) {
+    for (double g : {0.01, 0.05}) {
+      for (const Stream& stream : streams) {
+        SCOPED_TRACE(std::string(edvs::toString(f)) + " garbage " + std::to_string(g) + " " +
+                     stream.name);
+        ParserConfig cfg;
+        cfg.format = f;
+        NoisyLine line;
+        const Outcome o =
+            runNoisyLine(stream.events, cfg, g, 0, seed++, &line, Garbage::kBytesAnywhere);
+        const auto& c = o.comparison;
+        const double hit = static_cast<double>(line.hit_inside) / c.sent;
+        std::printf(
+            "bytes-anywhere %s %.0f %% %s: sent %zu hit inside %.2f %% lost %.2f %% (%.2fx hit) "
+            "invented %zu (%.3f %%) backwards %zu final error %lld us\n",
+            edvs::toString(f), 100 * g, stream.name.c_str(), c.sent, 100 * hit, 100 * c.lostShare(),
+            hit > 0 ? c.lostShare() / hit : 0.0, c.invented, 100 * c.inventedShare(), c.backwards,
+            static_cast<long long>(c.final_error_us));
+        EXPECT_EQ(c.backwards, 0u);
+        if (g < 0.02) {
+          EXPECT_LE(c.lostShare(), 1.5 * hit);
+        }
+      }
     }
   }
 }

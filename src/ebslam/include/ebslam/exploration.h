@@ -67,9 +67,22 @@ struct ExplorationConfig {
   /// Best-first search budget: expanded cells and CPU time [s].
   int planner_max_nodes = 3000;
   double planner_time_budget_s = 0.005;
-  /// Plan around the cells next to blocked cells (within about a robot radius of an obstacle)
-  /// when a path exists that way.
-  bool keep_clear_of_blocked = true;
+  /// Extra path cost [cells] of stepping onto a cell next to a blocked cell (its centre lies
+  /// within about a robot radius of an obstacle): paths keep clear of obstacles where that is
+  /// cheap, yet still pass a gap the body fits when the gain beyond it pays for the detour
+  /// (0: no preference). A hard avoidance would trap the robot in a pocket whose mouth is narrow.
+  double near_blocked_cost = 2.0;
+  /// Oscillation: when the last oscillation_window cell changes of the robot visited at most
+  /// oscillation_max_cells distinct cells, it is going round in a loop; it then commits to a
+  /// plan of at least commit_min_cells cells that ends outside the loop and keeps it until
+  /// driven (a bump still backs out and replans, committed). 0 cells: no detection.
+  int oscillation_window = 30;
+  int oscillation_max_cells = 7;
+  int commit_min_cells = 8;
+  /// Path cost [cells] of crossing a blocked cell when a committed plan cannot leave the loop
+  /// otherwise: cone cells are guesses around a contact, so a robot walled in
+  /// by its own cones tries the cheapest way past them (a real obstacle bumps it again).
+  double escape_blocked_cost = 20.0;
   /// Paths shorter than this many cells are taken only if no longer one is found.
   int min_path_cells = 3;
   /// Longest path handed to the controller [cells] (replanned when done).
@@ -83,12 +96,21 @@ struct ExplorationConfig {
   double turn_in_place_rad = 0.8;
   double heading_gain = 2.5;
   double max_speed_mps = 0.3;
-  double max_turn_rate_rps = 1.5;
+  /// Largest commanded turn rate [rad/s]: below the robot's 1.5, because EB-SLAM-2D lost the
+  /// robot turning at 1.5 rad/s in place (office seed 5, 72 s); chosen on office and l_shape seed
+  /// 1 (200 s: 1.0 covers as much as 1.5, 0.6-0.8 less). docs/results/exploration.md
+  double max_turn_rate_rps = 1.0;
   /// After a bump: drive away from the contact for this long at this speed [s, m/s].
   double backout_time_s = 0.5;
   double backout_speed_mps = 0.1;
   /// Bumps in a row (each before the robot has left its cell) after which the robot is stuck.
   int max_bumps_in_a_row = 6;
+  /// While EB-SLAM is lost: reverse straight at this speed [m/s] (forwards after a contact
+  /// behind), no turning: in the simulated rooms turning in place while lost let the error
+  /// grow to metres, driving straight let EB-SLAM re-localise; give up after
+  /// relocalise_timeout_s [s] and explore on.
+  double relocalise_speed_mps = 0.1;
+  double relocalise_timeout_s = 20.0;
   /// No pose for this long [s]: stop and report it.
   double pose_timeout_s = 0.5;
   /// A pose farther than max_speed * dt + pose_jump_m [m] (or a turn beyond max_turn_rate * dt
@@ -122,9 +144,17 @@ class ExplorationPlanner {
   /// Normalises Z and E over the cells reachable from `robot_cell` (eq. 7.8) and computes the
   /// gain (eq. 7.9, 7.10); cells outside Omega get gain 0.
   void computeGain(int robot_cell);
-  /// Best-first search from the robot's cell (computeGain first). Returns the cells of the path
-  /// without the start cell; empty if the robot is outside the grid or no neighbour is open.
+  /// As computeGain, with Omega grown through blocked cells too (blocked cells get gain 0).
+  void computeGain(int robot_cell, bool through_blocked);
+  /// Best-first search from the robot's cell (computeGain first) by gain per path cost (one per
+  /// cell plus near_blocked_cost next to blocked cells). Returns the cells of the path without
+  /// the start cell; empty if the robot is outside the grid or no neighbour is open.
   std::vector<int> plan(const Eigen::Vector2d& position);
+  /// A committed plan out of a loop: at least commit_min_cells cells (or the longest found),
+  /// ending on a cell with loop_cells[cell] == 0; crosses blocked cells at escape_blocked_cost
+  /// if nothing else leaves the loop. Empty if the robot is outside the grid.
+  std::vector<int> planOutOf(const Eigen::Vector2d& position,
+                             const std::vector<std::uint8_t>& loop_cells);
 
   const std::vector<float>& localisationMap() const { return z_; }
   const std::vector<float>& obstacleMap() const { return e_; }
@@ -136,11 +166,20 @@ class ExplorationPlanner {
   bool lastPlanHitTimeBudget() const { return last_hit_time_; }
 
  private:
-  std::vector<int> search(int start_cell, const std::vector<std::uint8_t>& closed_cells);
+  struct SearchGoal {
+    int min_cells = 1;                                   // shorter paths only if nothing else
+    const std::vector<std::uint8_t>* exclude = nullptr;  // cells a path may not end on
+    bool cross_blocked = false;                          // blocked cells at escape_blocked_cost
+  };
+  std::vector<int> search(int start_cell, const SearchGoal& goal);
+  void updateNearBlocked();
 
   ExplorationConfig config_;
   HexGrid grid_;
-  std::vector<std::uint8_t> avoid_;  // scratch: blocked cells and their neighbours
+  std::vector<std::uint8_t> near_blocked_;  // cells next to a blocked cell (not blocked)
+  bool near_blocked_stale_ = true;
+  // Search scratch, kept to avoid allocations per plan.
+  std::vector<std::uint8_t> closed_scratch_;
   std::vector<float> z_, e_, gain_;
   std::vector<std::uint8_t> blocked_;
   std::vector<Eigen::Vector2d> bump_points_;
@@ -161,6 +200,9 @@ enum class ExplorationState {
   kBackingOut,  ///< moving away from a contact
   kNoPose,      ///< no pose for pose_timeout_s: stopped
   kStuck,       ///< bumped on every side, too many bumps in a row, or no path: stopped
+  /// EB-SLAM lost track (setLocalisationLost): driving slowly straight back the way it came, over
+  /// ceiling just mapped, without turning; the maps are not updated from the untrusted pose.
+  kRelocalising,
 };
 const char* toString(ExplorationState state);
 
@@ -176,6 +218,11 @@ class Explorer {
   VelocityCommand update(double now_s, const std::optional<Pose2>& pose, const BumpReading& bump,
                          const GridMap2f* normalisation);
 
+  /// The localisation's verdict (e.g. TrackingMonitor, ebslam2d_tracking.h) at time now_s [s]:
+  /// while lost, update() turns in place (kRelocalising) and leaves the maps alone; when tracking
+  /// returns it replans.
+  void setLocalisationLost(bool lost, double now_s);
+
   ExplorationState state() const { return state_; }
   /// Why the robot is in its state (empty while exploring normally); for logs.
   const std::string& message() const { return message_; }
@@ -186,8 +233,14 @@ class Explorer {
   std::size_t replans() const { return replans_; }
   std::size_t bumps() const { return bumps_; }
   std::size_t poseJumps() const { return pose_jumps_; }
+  /// Loops detected (see ExplorationConfig::oscillation_window) and whether the current plan is
+  /// a committed one out of a loop.
+  std::size_t loopsDetected() const { return loops_; }
+  bool committed() const { return committed_; }
 
  private:
+  /// Records a cell change of the robot; true when the recent cells form a loop.
+  bool recordCell(int cell);
   void replan(double now_s, const Eigen::Vector2d& position, const GridMap2f* normalisation);
   VelocityCommand follow(const Pose2& pose);
 
@@ -209,6 +262,18 @@ class Explorer {
   std::size_t replans_ = 0;
   std::size_t bumps_ = 0;
   std::size_t pose_jumps_ = 0;
+  std::vector<int> recent_cells_;         // the last oscillation_window cell changes
+  std::vector<std::uint8_t> loop_cells_;  // per grid cell: part of the detected loop
+  bool committed_ = false;
+  std::size_t loops_ = 0;
+  bool lost_ = false;
+  double lost_since_s_ = -1.0;
+  double relocalise_direction_ = -1.0;  // -1 reversing, +1 forwards
+  std::size_t relocalisations_ = 0;
+
+ public:
+  /// Times the explorer stopped to re-localise.
+  std::size_t relocalisations() const { return relocalisations_; }
 };
 
 /// The random bump-and-turn baseline: drives straight; after a bump backs out and turns to a

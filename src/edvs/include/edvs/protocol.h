@@ -110,9 +110,20 @@ struct ParserConfig {
   /// again, continuing monotonically from the last accepted time.
   bool reject_implausible = true;
   /// Add wrap periods that a quiet gap hid, judged from host time after an idle read (see
-  /// TimestampUnwrapper). Right for a real device; wrong when the host stalls for more than
-  /// ~7/8 of a period while the device side also paused with events queued.
+  /// TimestampUnwrapper). Absolute formats fed with host times (framing by evidence) count only
+  /// the part of the gap that the events after it do not explain: a stalled line or a
+  /// descheduled reader delivers a backlog whose own timestamps carry the device time that
+  /// passed (see EventParser).
   bool infer_wraps_from_host_time = true;
+  /// Absolute formats: the events after a gap that may hide wrap periods are held until the
+  /// stream is live again: a read found the line idle, or over the last live_window_us of host
+  /// time the device clock advanced no faster than the host clock (plus a quarter and 2 ms).
+  std::int64_t live_window_us = 10000;
+  /// ...and the liveliest of them is at most this much later than the latency floor, beyond
+  /// whole periods [us] (the jitter of a live event's latency).
+  std::int64_t live_lag_us = 8000;
+  /// ...or until they span this much host time: then the evidence there is decides [us].
+  std::int64_t max_gap_hold_us = 1000000;
   /// Absolute-timestamp formats (E2..E4): an unconfirmed stream (no event published yet, or
   /// every frame after the last published event refused) is taken to have a new clock (device
   /// reset) once this many consecutive frames agree with each other; time continues
@@ -148,6 +159,9 @@ struct ParserStats {
   std::uint64_t implausible_jumps = 0;     ///< see ParserConfig::jump_tolerance_us
   std::uint64_t rejected_events = 0;       ///< event-like frames refused as framing errors
   std::uint64_t clock_jumps = 0;           ///< device clock discontinuities accepted
+  /// Gaps (an idle line, host time long enough to hide a wrap period) after which the events
+  /// were held until the stream was live again to count the hidden periods.
+  std::uint64_t gaps_judged = 0;
 };
 
 /// Sum of the counters that only line noise or a wrong format raise (dropped bytes, resyncs,
@@ -297,6 +311,13 @@ class EventParser {
   Link clockJumpLink(std::size_t pos);  // counts the jump, forgets the latency floor
   void countSkipped(std::size_t from, std::size_t to);  // bytes [from, to) dropped
   void decideAbsolute(bool flushing, ebslam::EventVector& out);
+  // Gap judgement: events published after a gap that may hide wrap periods wait in staged_ with
+  // the time the stream alone gives them; once the stream is live again the periods that the
+  // host clock shows beyond it are added to all of them (see ParserConfig::live_window_us).
+  void stageOrEmit(const ebslam::Event& e, std::int64_t host_us, ebslam::EventVector& out);
+  // Adds the hidden periods to the staged events and emits them; without `force`, only if the
+  // liveliest staged event is late by at most live_lag_us beyond whole periods.
+  bool resolveGap(ebslam::EventVector& out, bool force);
 
   std::vector<std::uint8_t> held_;         // bytes after the last published event
   std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
@@ -308,6 +329,16 @@ class EventParser {
   std::vector<char> chain_open_;           // per held position: the chain may grow with more bytes
   std::vector<std::int64_t> chain_advance_;   // per held position: device time its chain spans
   std::vector<std::int64_t> chain_end_host_;  // per held position: host time of its chain's end
+  struct Staged {
+    ebslam::Event event;
+    std::int64_t host_us;
+  };
+  std::vector<Staged> staged_;        // events after a gap, times without the hidden periods
+  bool judging_gap_ = false;          // staged_ is in use
+  std::size_t live_from_ = 0;         // staged_ index: the newest at least live_window_us old
+  std::int64_t gap_residual_us_ = 0;  // least host time minus latency floor minus event time
+  bool gap_residual_known_ = false;
+  std::int64_t gap_latency_us_ = 0;  // latency of a live event when the gap began
   std::uint32_t idle_epoch_ = 0;
   std::int64_t previous_read_host_ = kNoHost;
   bool mode_decided_ = false;  // set by the first bytes fed
