@@ -266,10 +266,10 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       zero_time_ += input.zero_time;
       ++bad_input_seen_;
       if (zero_time_log_.due()) {
-        NODELET_ERROR("dropped %zu depth events stamped 0 (unset event time) (%llu messages with "
-                      "them since the previous such message not logged)",
-                      input.zero_time,
-                      static_cast<unsigned long long>(zero_time_log_.suppressed()));
+        NODELET_ERROR(
+            "dropped %zu depth events stamped 0 (unset event time) (%llu messages with "
+            "them since the previous such message not logged)",
+            input.zero_time, static_cast<unsigned long long>(zero_time_log_.suppressed()));
       }
     }
     if (input.no_depth > 0) {
@@ -545,9 +545,9 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       status.summary(DiagnosticStatus::WARN, "bad input since the last report (see the log)");
     } else if (!slam_) {
       status.summary(DiagnosticStatus::OK, "waiting for events");
-    } else if (slam_->health().state == ebslam::TrackingState::kLost) {
+    } else if (slam_->health().state == ebslam::TrackingState3d::kLost) {
       status.summary(DiagnosticStatus::WARN, "lost: the events stopped fitting the map");
-    } else if (slam_->health().state == ebslam::TrackingState::kRecovering) {
+    } else if (slam_->health().state == ebslam::TrackingState3d::kRecovering) {
       status.summary(DiagnosticStatus::WARN, "recovering: the events fit the map again");
     } else {
       status.summary(DiagnosticStatus::OK, "tracking");

@@ -42,13 +42,13 @@ enum class MapSplat3d {
 };
 
 /// Whether the filter believes it follows the sensor (EventSlam3d::health()).
-enum class TrackingState {
+enum class TrackingState3d {
   kTracking,    ///< the events fit the map about as well as they did recently
   kLost,        ///< the events' fit collapsed (score ratio below lost_ratio)
   kRecovering,  ///< the fit came back above recover_ratio but not yet for recover_hold_s
 };
 /// "tracking", "lost" or "recovering".
-const char* toString(TrackingState state);
+const char* toString(TrackingState3d state);
 
 /// Thresholds of the tracking state machine. The fit is the best particle's mean map value per
 /// event; it is smoothed over fast_time_s and compared with its slow average over slow_time_s
@@ -64,7 +64,7 @@ struct TrackingHealthConfig {
 
 /// Health of the filter after the last batch.
 struct TrackingHealth {
-  TrackingState state = TrackingState::kTracking;
+  TrackingState3d state = TrackingState3d::kTracking;
   /// Effective sample size of the normalised scores over N, (0, 1].
   double ess_share = 1.0;
   double fit_fast = 0.0;   ///< smoothed best mean map value per event (see TrackingHealthConfig)
