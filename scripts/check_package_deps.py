@@ -37,9 +37,6 @@ ALL_TAGS = BUILD_TAGS | EXEC_TAGS | {"test_depend", "doc_depend"}
 CMAKE_BUILTIN = {"Threads", "PkgConfig", "GoogleTest", "CTest", "GNUInstallDirs",
                  "CMakePackageConfigHelpers", "MPI"}
 SKIP_DIRS = {".ws", ".git", "build", "devel", "install", "__pycache__"}
-# Folders outside a package that it installs and so owns (relative to the repository root): the
-# pipeline's launch files are installed into share/ebslam_ros.
-OWNED_DIRS = {"ebslam_ros": ["launch"]}
 
 
 def load_map(path):
@@ -278,13 +275,11 @@ def check(root, map_path):
                     continue
                 require(key, ALL_TAGS if in_test else EXEC_TAGS, f"import {module}", f"{rel}:{line}")
 
-        launch_dirs = [directory] + [os.path.join(root, d) for d in OWNED_DIRS.get(name, [])]
-        for launch_dir in launch_dirs:
-            for path, in_test, referenced in launch_references(launch_dir):
-                for key, line in referenced:
-                    if key != name:
-                        require(key, ALL_TAGS if in_test else EXEC_TAGS, f"launch reference {key}",
-                                f"{os.path.relpath(path, root)}:{line}")
+        for path, in_test, referenced in launch_references(directory):
+            for key, line in referenced:
+                if key != name:
+                    require(key, ALL_TAGS if in_test else EXEC_TAGS, f"launch reference {key}",
+                            f"{os.path.relpath(path, root)}:{line}")
 
         for key in declared:
             if key not in workspace and key not in keys:

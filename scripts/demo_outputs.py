@@ -53,13 +53,19 @@ def main(bag_path, out):
     map_image = None
     poses, truth = [], []
     with rosbag.Bag(bag_path) as bag:
-        for topic, msg, _ in bag.read_messages():
+        for topic, msg, recorded in bag.read_messages():
             header = getattr(msg, "header", None)
             s = stats.setdefault(topic, {"count": 0, "frames": set(), "stamps": []})
             s["count"] += 1
             if header is not None:
                 s["frames"].add(header.frame_id)
                 s["stamps"].append(header.stamp.to_sec())
+            elif getattr(msg, "transforms", None):
+                # tf2_msgs/TFMessage (/tf, /tf_static) has no header: its transforms have theirs.
+                s["frames"].update(t.header.frame_id for t in msg.transforms)
+                s["stamps"].append(max(t.header.stamp.to_sec() for t in msg.transforms))
+            else:
+                s["stamps"].append(recorded.to_sec())
             if topic in PICTURES:
                 images.setdefault(topic, []).append(msg)
             elif topic == "/ebslam/map/image":
@@ -84,7 +90,7 @@ def main(bag_path, out):
                 line = f"  {topic}: MISSING"
                 ok &= topic not in REQUIRED
             else:
-                stamps = s["stamps"]
+                stamps = sorted(s["stamps"])
                 span = (stamps[-1] - stamps[0]) if len(stamps) > 1 else 0.0
                 rate = (len(stamps) - 1) / span if span > 0 else 0.0
                 frames = ",".join(sorted(s["frames"])) or "-"

@@ -4,7 +4,8 @@
 # packages are found and a launch file resolves from the result. A documented run, not part of
 # `make test` (each build takes the whole workspace: tens of minutes on 2 shared cores).
 #   scripts/user_workspace_build.sh [WORK_DIR]     (default: a new folder under /tmp)
-# Environment: JOBS (default: number of cores), TOOLS (default "catkin_build catkin_make_isolated").
+# Environment: JOBS (default: number of cores), TOOLS (default "catkin_build catkin_make_isolated"),
+# REF (default HEAD, the committed tree; `git write-tree` gives the staged one).
 # Prints one line per tool, "user_workspace: <tool> ok|FAILED (<seconds> s)"; exit 1 if any failed.
 set -eo pipefail
 
@@ -12,6 +13,7 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 work="${1:-$(mktemp -d /tmp/user_ws.XXXXXX)}"
 jobs="${JOBS:-$(nproc)}"
 tools="${TOOLS:-catkin_build catkin_make_isolated}"
+ref="${REF:-HEAD}"  # the commit or tree copied into the workspace
 # shellcheck source=ros_env.sh
 source "${repo}/scripts/ros_env.sh"
 # Debian's pluginlib uses FindPython3: both variables point at Debian's interpreter (a pyenv one
@@ -24,7 +26,7 @@ make_workspace() {
   rm -rf "${ws}"
   mkdir -p "${ws}/src/ebslam_repo"
   # The committed tree, as a clone would have it (no build folders, no local files).
-  git -C "${repo}" archive HEAD | tar -x -C "${ws}/src/ebslam_repo"
+  git -C "${repo}" archive "${ref}" | tar -x -C "${ws}/src/ebslam_repo"
   # The user's own package, depending on ours through find_package(catkin COMPONENTS ...).
   mkdir -p "${ws}/src/my_robot/src"
   cat >"${ws}/src/my_robot/package.xml" <<'EOF'
@@ -80,7 +82,7 @@ smoke() {
       echo "  rospack find ${pkg}: $(rospack find "${pkg}")"
     done
     local launch
-    for launch in "ebslam_ros simulated_localisation.launch" "dasp_ros folder_segmentation.launch" \
+    for launch in "ebslam_ros simulation.launch" "ebslam_ros simulated_localisation.launch" \
                   "edvs_driver edvs.launch"; do
       # shellcheck disable=SC2086
       echo "  roslaunch --files ${launch}: $(roslaunch --files ${launch} | wc -l) files"

@@ -122,6 +122,11 @@ run_tests() {
       fi
     fi
   done
+  # The install space on its own: installed into a temporary prefix (no rebuild), every launch file
+  # started from there for a few seconds with its main topics asserted.
+  echo "=== install space"
+  /usr/bin/python3 "${repo}/scripts/tests/install_space_test.py" "${ws}" "${results}/install_space.xml" \
+    </dev/null 2>&1 | tail -n 20 || status=1
   # catkin_test_results checks catkin's own XML (and finds missing results); our counter reads
   # every file once (no double counting). Its failures are shown and counted, never discarded.
   local catkin_results

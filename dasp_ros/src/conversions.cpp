@@ -258,10 +258,10 @@ dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
   double min_label = 0.0, max_label = -1.0;
   cv::minMaxLoc(result.labels, &min_label, &max_label);
   if (min_label < -1.0 || max_label >= static_cast<double>(result.superpixels.size())) {
-    throw std::invalid_argument(
-        "labels " + std::to_string(static_cast<long long>(min_label)) + ".." +
-        std::to_string(static_cast<long long>(max_label)) + " do not index the " +
-        std::to_string(result.superpixels.size()) + " superpixels (-1 = none)");
+    throw std::invalid_argument("labels " + std::to_string(static_cast<long long>(min_label)) +
+                                ".." + std::to_string(static_cast<long long>(max_label)) +
+                                " do not index the " + std::to_string(result.superpixels.size()) +
+                                " superpixels (-1 = none)");
   }
   return result;
 }

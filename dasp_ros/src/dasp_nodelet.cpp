@@ -16,6 +16,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/SuperpixelArray.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -52,12 +53,9 @@ class DaspNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    try {
-      config_ = loadDaspNodeConfig(pnh);
-    } catch (const std::exception& error) {
-      NODELET_FATAL("Dasp not started: %s", error.what());
-      throw;
-    }
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Dasp " + getName(),
+                             [&] { config_ = loadDaspNodeConfig(pnh); });
     segmenter_ = std::make_unique<dasp::DaspSegmenter>(config_.dasp);
 
     image_transport::ImageTransport transport(nh);

@@ -14,6 +14,7 @@
 #include <camera_info_manager/camera_info_manager.h>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -65,12 +66,9 @@ class OpenNi2SourceNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    try {
-      config_ = loadOpenNi2SourceConfig(pnh);
-    } catch (const std::exception& error) {
-      NODELET_FATAL("OpenNi2Source not started: %s", error.what());
-      throw;
-    }
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "OpenNi2Source " + getName(),
+                             [&] { config_ = loadOpenNi2SourceConfig(pnh); });
     image_transport::ImageTransport transport(nh);
     color_pub_ = transport.advertise("rgb/image_rect_color", 2);
     depth_pub_ = transport.advertise("depth_registered/image_raw", 2);

@@ -13,6 +13,7 @@
 // skipped, and named in an error the first time (also when looping, at any rate). Frames of
 // another size with the calibration's aspect ratio get scaled intrinsics (a warning per size).
 #include <dasp/rgbd_io.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -35,18 +36,15 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "RGB-D folder source " + getName(), [&] {
       config_ = loadRgbdFolderSourceConfig(getPrivateNodeHandle());
       frames_ = dasp::listRgbdFolder(config_.folder);
       if (frames_.empty()) {
         throw std::invalid_argument("no <name>_rgb.png with <name>_depth_mm.png in ~folder '" +
                                     config_.folder + "'");
       }
-    } catch (const std::exception& error) {
-      // As the eDVS driver: the nodelet does not load (a node exits), the reason names the cause.
-      NODELET_FATAL("RGB-D folder source not started: %s", error.what());
-      throw;
-    }
+    });
     color_pub_ = nh.advertise<sensor_msgs::Image>("rgb/image_rect_color", 2);
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 2);
     color_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("rgb/camera_info", 2);

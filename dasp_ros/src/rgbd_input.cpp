@@ -129,17 +129,17 @@ dasp::RgbdFrame RgbdInput::convert(const sensor_msgs::Image& color, const sensor
   }
   if (color.width != depth.width || color.height != depth.height) {
     throw InputError(depth_topic, "depth image " + std::to_string(depth.width) + "x" +
-                                       std::to_string(depth.height) + " differs from the colour " +
-                                       std::to_string(color.width) + "x" +
-                                       std::to_string(color.height) + " of " + color_topic +
-                                       ": it must be registered to it");
+                                      std::to_string(depth.height) + " differs from the colour " +
+                                      std::to_string(color.width) + "x" +
+                                      std::to_string(color.height) + " of " + color_topic +
+                                      ": it must be registered to it");
   }
   if ((info.width != 0 || info.height != 0) &&
       (info.width != color.width || info.height != color.height)) {
     throw InputError(info_topic, "camera_info is for " + std::to_string(info.width) + "x" +
-                                      std::to_string(info.height) + ", the images are " +
-                                      std::to_string(color.width) + "x" +
-                                      std::to_string(color.height));
+                                     std::to_string(info.height) + ", the images are " +
+                                     std::to_string(color.width) + "x" +
+                                     std::to_string(color.height));
   }
   try {
     frame.intrinsics = toIntrinsics(info);
@@ -148,7 +148,7 @@ dasp::RgbdFrame RgbdInput::convert(const sensor_msgs::Image& color, const sensor
   }
   if (cv::countNonZero(frame.depth) == 0) {
     throw InputError(depth_topic, "no valid depth pixel in the " + depth.encoding +
-                                       " image (all zero, NaN or out of range)");
+                                      " image (all zero, NaN or out of range)");
   }
   return frame;
 }

@@ -19,6 +19,7 @@
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
@@ -52,12 +53,9 @@ class SdaspNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    try {
-      config_ = loadSdaspNodeConfig(pnh);
-    } catch (const std::exception& error) {
-      NODELET_FATAL("Sdasp not started: %s", error.what());
-      throw;
-    }
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Sdasp " + getName(),
+                             [&] { config_ = loadSdaspNodeConfig(pnh); });
     array_topic_ = nh.resolveName("superpixels");
     labels_topic_ = nh.resolveName("superpixels/labels");
     image_transport::ImageTransport transport(nh);

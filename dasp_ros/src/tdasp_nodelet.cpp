@@ -20,6 +20,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -46,13 +47,11 @@ class TdaspNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Tdasp " + getName(), [&] {
       config_ = loadTdaspNodeConfig(pnh);
       tdasp_ = std::make_unique<dasp::TemporalDasp>(config_.tdasp);
-    } catch (const std::exception& error) {
-      NODELET_FATAL("Tdasp not started: %s", error.what());
-      throw;
-    }
+    });
     image_transport::ImageTransport transport(nh);
     superpixels_pub_ = nh.advertise<ebslam_msgs::SuperpixelArray>("superpixels", 5);
     labels_pub_ = transport.advertise("superpixels/labels", 5);

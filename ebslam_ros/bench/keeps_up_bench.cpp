@@ -134,10 +134,11 @@ int main(int argc, char** argv) {
   std::printf("poses received %zu; latency median %.2f ms, p99 %.2f ms, max %.2f ms\n",
               sorted.size(), 1e3 * quantile(0.5), 1e3 * quantile(0.99), 1e3 * quantile(1.0));
   const long long received = std::atoll(diagnostics["messages"].c_str());
-  std::printf("filter: messages %s, lost (sent - received) %lld, events received %s, events "
-              "processed %s\n",
-              diagnostics["messages"].c_str(), static_cast<long long>(messages) - received,
-              diagnostics["events received"].c_str(), diagnostics["events processed"].c_str());
+  std::printf(
+      "filter: messages %s, lost (sent - received) %lld, events received %s, events "
+      "processed %s\n",
+      diagnostics["messages"].c_str(), static_cast<long long>(messages) - received,
+      diagnostics["events received"].c_str(), diagnostics["events processed"].c_str());
   const double node_rate = std::atof(diagnostics["events per second of processing"].c_str());
   const double core_rate = static_cast<double>(core_events.size()) / core_s;
   std::printf("events/s of processing: node %.0f, core (this process, N=%d) %.0f, ratio %.3f\n",

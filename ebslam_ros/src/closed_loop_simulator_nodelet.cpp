@@ -19,6 +19,7 @@
 // ~clock_start + t with /clock; steps are paced at ~speed times real time (or run as fast as
 // they are simulated when that is slower). The simulation runs in a thread of its own.
 #include <ebslam_msgs/Bump.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <geometry_msgs/Twist.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
@@ -58,15 +59,13 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
     const std::string default_plan =
-        package.empty() ? "" : package + "/../src/ebslam/floor_plans/office.txt";
-    try {
+        package.empty() ? "" : package + "/data/floor_plans/office.txt";
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "closed-loop simulator " + getName(), [&] {
       config_ = loadClosedLoopSimulatorNodeConfig(getPrivateNodeHandle(), default_plan);
       plan_ = ebslam::readFloorPlan(config_.floor_plan, config_.simulator.robot.radius_m);
       simulator_ = std::make_unique<ebslam::ClosedLoopSimulator>(plan_, config_.simulator);
-    } catch (const std::exception& error) {
-      NODELET_ERROR("closed-loop simulator not started: %s", error.what());
-      return;
-    }
+    });
     ros::NodeHandle& nh = getNodeHandle();
     events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
     bump_pub_ = nh.advertise<ebslam_msgs::Bump>("bump", 100);

@@ -24,6 +24,7 @@
 // kept frame or newer than the latest by more than ~max_frame_age (NaN; when frames keep
 // arriving that means the event and depth clocks disagree by more than a frame).
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -71,14 +72,11 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
   };
 
   void onInit() override {
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "depth event fusion " + getName(), [&] {
       config_ = loadDepthEventFusionNodeConfig(getPrivateNodeHandle());
       if (!config_.edvs_camera_info) fusion_.emplace(config_.sensors, config_.fusion);
-    } catch (const std::exception& error) {
-      // As the other nodes with a missing required input: the nodelet does not load.
-      NODELET_FATAL("depth event fusion not started: %s", error.what());
-      throw;
-    }
+    });
     ros::NodeHandle& nh = getNodeHandle();
     if (config_.publish_tf) publishStaticTf();
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, getPrivateNodeHandle());

@@ -13,6 +13,7 @@
 // (dynamic_reconfigure), ~queue_size, ~max_backward; see README.md.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <boost/thread/recursive_mutex.hpp>
@@ -42,12 +43,10 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
   static constexpr std::int64_t kNoTime = std::numeric_limits<std::int64_t>::min();
 
   void onInit() override {
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event denoiser " + getName(), [&] {
       config_ = loadEventDenoiserNodeConfig(getPrivateNodeHandle());
-    } catch (const std::exception& error) {
-      NODELET_ERROR("event denoiser not started: %s", error.what());
-      return;
-    }
+    });
     ros::NodeHandle& nh = getNodeHandle();
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventDenoiserKnobsConfig>>(
         reconfigure_mutex_, getPrivateNodeHandle());

@@ -12,6 +12,7 @@
 // damaged line otherwise (that event is dropped); an event whose time falls outside ros::Time is
 // dropped. Counts of both are reported at the end of the file.
 // With ~wait_for_subscribers playback starts 0.5 s after the first subscriber has connected.
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
@@ -36,14 +37,11 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
   static constexpr double kSubscriberSettleTime = 0.5;  // [s]
 
   void onInit() override {
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event file player " + getName(), [&] {
       config_ = loadEventFilePlayerConfig(getPrivateNodeHandle());
       openFile();
-    } catch (const std::exception& error) {
-      // As the eDVS driver: the nodelet does not load (a node exits), the reason names the cause.
-      NODELET_FATAL("event file player not started: %s", error.what());
-      throw;
-    }
+    });
     publisher_ = getNodeHandle().advertise<ebslam_msgs::EventArray>("events", 100);
     NODELET_INFO("playing '%s' (%s) at %.2fx speed%s", config_.file.c_str(),
                  ebslam::toString(reader_->format()), config_.speed,

@@ -49,8 +49,8 @@ EventInputResult EventInputGuard::take(const ebslam_msgs::EventArray& msg) {
 }
 
 DepthEventInputResult DepthEventInputGuard::take(const ebslam_msgs::DepthEventArray& msg,
-                                                std::int64_t max_backward_us,
-                                                std::int64_t gap_warning_us) {
+                                                 std::int64_t max_backward_us,
+                                                 std::int64_t gap_warning_us) {
   DepthEventInputResult result;
   result.segments.emplace_back();
   result.segments.back().events.reserve(msg.events.size());

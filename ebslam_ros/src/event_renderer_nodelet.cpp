@@ -5,6 +5,7 @@
 // while subscribed: the events of the last ~accumulation_time seconds of event time, ON in
 // ~on_colour and OFF in ~off_colour ([r, g, b]) over black or the newest `image`; stamp = the
 // newest event's ts, frame = the events' frame. Nothing is published before the first event.
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
@@ -28,12 +29,9 @@ class EventRendererNodelet : public nodelet::Nodelet {
   static constexpr std::uint32_t kMaxSide = 4096;  // [px]
 
   void onInit() override {
-    try {
-      config_ = loadEventRendererConfig(getPrivateNodeHandle());
-    } catch (const std::exception& error) {
-      NODELET_ERROR("event renderer not started: %s", error.what());
-      return;
-    }
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(),
+                             [&] { config_ = loadEventRendererConfig(getPrivateNodeHandle()); });
     ros::NodeHandle& nh = getNodeHandle();
     image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);
     events_sub_ = nh.subscribe("events", 100, &EventRendererNodelet::onEvents, this);

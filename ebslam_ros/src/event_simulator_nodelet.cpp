@@ -17,6 +17,7 @@
 // t / ~speed, as the event file player). Pacing: the message for t is sent at
 // wall_start + t / ~speed (or as soon as simulated when the simulator is slower than that).
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
@@ -51,17 +52,19 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
     const std::string default_scenario =
-        package.empty() ? "" : package + "/../test/data/sample_session/pioneer_360_excerpt.yaml";
-    try {
+        package.empty() ? "" : package + "/data/sample_session/pioneer_360_excerpt.yaml";
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event simulator " + getName(), [&] {
       config_ = loadEventSimulatorNodeConfig(getPrivateNodeHandle(), default_scenario);
       prepare();
-    } catch (const std::exception& error) {
-      NODELET_ERROR("event simulator not started: %s", error.what());
-      return;
-    }
+    });
     ros::NodeHandle& nh = getNodeHandle();
     ground_truth_.emplace(nh, config_.map_frame, config_.ground_truth_frame,
                           static_cast<std::size_t>(config_.path_length));
+    if (!config_.align_frame.empty()) {
+      ground_truth_->publishAlignedFrame(ebslam::interpolatePose(path_, t_begin_),
+                                         config_.align_frame);
+    }
     const PacedEventOptions options = pacedEventOptions(
         config_, config_.frame_id, config_.simulator.camera.width, config_.simulator.camera.height);
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {

@@ -13,6 +13,7 @@
 //  - service save_map (ebslam_msgs/SaveMap): <prefix>.png + <prefix>.yaml in map_server's
 //    layout, loadable by EventParticleFilter's ~map.
 // Both are in ~map_frame, stamped with the last event's time.
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -60,7 +61,8 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
   };
 
   void onInit() override {
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventSlam2d " + getName(), [&] {
       const EventSlam2dNodeConfig config = loadEventSlam2dNodeConfig(getPrivateNodeHandle());
       map_period_ = ros::WallDuration(config.map_publish_period_s);
       map_frame_ = config.node.map_frame;
@@ -89,9 +91,7 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
       NODELET_INFO("EB-SLAM-2D: map %.1f m with %.3f m cells, N=%d B=%d K=%d", slam.map_size_m,
                    slam.cell_size_wtrig * camera.wTrig(), slam.filter.num_particles,
                    slam.filter.batch_size, slam.filter.resample_every);
-    } catch (const std::exception& error) {
-      NODELET_ERROR("EventSlam2d not started: %s", error.what());
-    }
+    });
   }
 
   void publishMap(const ebslam::EventSlam2d& slam, const ros::Time& stamp) {

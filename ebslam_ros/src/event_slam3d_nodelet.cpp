@@ -13,6 +13,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/DepthEventArray.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <geometry_msgs/PoseArray.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -168,7 +169,8 @@ void writeVoxelCloud(const std::string& path, const std::vector<Voxel>& voxels) 
 class EventSlam3dNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
-    try {
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventSlam3d " + getName(), [&] {
       ros::NodeHandle& nh = getNodeHandle();
       ros::NodeHandle& pnh = getPrivateNodeHandle();
       config_ = loadEventSlam3dNodeConfig(pnh);
@@ -226,9 +228,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       NODELET_INFO("EB-SLAM-3D: %.3f m voxels, N=%d B=%d K=%d, ranges %.2f..%.2f m",
                    config_.slam.voxel_size_m, config_.slam.num_particles, config_.slam.batch_size,
                    config_.slam.resample_every, config_.slam.min_range_m, config_.slam.max_range_m);
-    } catch (const std::exception& error) {
-      NODELET_ERROR("EventSlam3d not started: %s", error.what());
-    }
+    });
   }
 
   /// Mounting from tf when ~mount_from_tf; false (and a throttled warning) while tf lacks it.

@@ -22,6 +22,7 @@
 // Time: control steps run on ROS time (sim time with /clock).
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ebslam_msgs/Bump.h>
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/OccupancyGrid.h>
@@ -52,12 +53,9 @@ class ExplorationNodelet : public nodelet::Nodelet {
   static constexpr double kWarnPeriodS = 5.0;  // throttle of repeated warnings [s, wall]
 
   void onInit() override {
-    try {
-      config_ = loadExplorationNodeConfig(getPrivateNodeHandle());
-    } catch (const std::exception& error) {
-      NODELET_ERROR("exploration not started: %s", error.what());
-      return;
-    }
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "exploration " + getName(),
+                             [&] { config_ = loadExplorationNodeConfig(getPrivateNodeHandle()); });
     ros::NodeHandle& nh = getNodeHandle();
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 10);
     plan_pub_ = nh.advertise<nav_msgs::Path>("plan", 1, true);

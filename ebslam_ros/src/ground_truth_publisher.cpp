@@ -3,6 +3,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Path.h>
 
+#include <cmath>
 #include <utility>
 
 namespace ebslam_ros {
@@ -44,6 +45,22 @@ void GroundTruthPublisher::publish(const ebslam::StampedPose& pose, const ros::T
     path.poses.assign(path_.begin(), path_.end());
     path_pub_.publish(path);
   }
+}
+
+void GroundTruthPublisher::publishAlignedFrame(const ebslam::StampedPose& start,
+                                               const std::string& frame) {
+  const Eigen::Vector3d heading = start.orientation * Eigen::Vector3d::UnitX();
+  const double yaw = std::atan2(heading.y(), heading.x());
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = ros::Time::now();
+  tf.header.frame_id = map_frame_;
+  tf.child_frame_id = frame;
+  tf.transform.translation.x = start.position.x();
+  tf.transform.translation.y = start.position.y();
+  tf.transform.translation.z = 0.0;
+  tf.transform.rotation.z = std::sin(0.5 * yaw);
+  tf.transform.rotation.w = std::cos(0.5 * yaw);
+  static_broadcaster_.sendTransform(tf);
 }
 
 }  // namespace ebslam_ros

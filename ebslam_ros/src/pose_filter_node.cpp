@@ -204,10 +204,11 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
     zero_time_ += input.zero_time;
     ++bad_input_seen_;
     if (zero_time_log_.due()) {
-      ROS_ERROR("%s: dropped %zu events stamped 0 (unset event time: does the source fill "
-                "Event.ts?); %llu messages with them since the previous such message not logged",
-                name_.c_str(), input.zero_time,
-                static_cast<unsigned long long>(zero_time_log_.suppressed()));
+      ROS_ERROR(
+          "%s: dropped %zu events stamped 0 (unset event time: does the source fill "
+          "Event.ts?); %llu messages with them since the previous such message not logged",
+          name_.c_str(), input.zero_time,
+          static_cast<unsigned long long>(zero_time_log_.suppressed()));
     }
   }
   if (input.gap_us > 0) {
@@ -216,12 +217,13 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
       constexpr double kDayS = 86400.0;
       const double gap_s = 1e-6 * static_cast<double>(input.gap_us);
       if (gap_s > kDayS) {
-        ROS_WARN("%s: event time jumped forward by %.0f s (a bad stamp or a clock change?); "
-                 "the filter continues from its last pose",
-                 name_.c_str(), gap_s);
+        ROS_WARN(
+            "%s: event time jumped forward by %.0f s (a bad stamp or a clock change?); "
+            "the filter continues from its last pose",
+            name_.c_str(), gap_s);
       } else {
-        ROS_WARN("%s: no events for %.3f s; the filter continues from its last pose",
-                 name_.c_str(), gap_s);
+        ROS_WARN("%s: no events for %.3f s; the filter continues from its last pose", name_.c_str(),
+                 gap_s);
       }
     }
   }

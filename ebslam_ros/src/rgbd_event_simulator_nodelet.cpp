@@ -16,6 +16,7 @@
 // EventSimulator). Pacing: the message for t is sent at wall_start + (t - start) / ~speed, or as
 // soon as simulated when the simulator is slower. Seeded (~seed): the same run every time.
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
+#include <ebslam_msgs/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
@@ -88,14 +89,12 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   void onInit() override {
     const std::string package = ros::package::getPath("ebslam_ros");
     const std::string default_trajectory =
-        package.empty() ? "" : package + "/../test/data/sample_session/pioneer_360_excerpt.txt";
-    try {
+        package.empty() ? "" : package + "/data/sample_session/pioneer_360_excerpt.txt";
+    // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "RGB-D event simulator " + getName(), [&] {
       config_ = loadRgbdEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
       prepare();
-    } catch (const std::exception& error) {
-      NODELET_ERROR("RGB-D event simulator not started: %s", error.what());
-      return;
-    }
+    });
     ros::NodeHandle& nh = getNodeHandle();
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 10);
     depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth_registered/camera_info", 10);

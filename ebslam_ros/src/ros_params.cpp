@@ -29,6 +29,7 @@ using ebslam_msgs::requirePositive;
 std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
                              const std::array<double, 3>& default_value) {
   std::vector<double> values;
+  ebslam_msgs::markParamRead(nh, name);
   if (!nh.getParam(name, values)) {
     if (nh.hasParam(name)) fail(nh, name, "must be a list of three numbers");
     return default_value;
@@ -176,6 +177,7 @@ EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   config.node = loadPoseFilterNodeConfig(nh);
   ebslam::Ebslam2dConfig& s = config.slam;
   s.filter = loadEventFilterConfig(nh, s.filter);
+  s.noise_aware_diffusion = param<bool>(nh, "noise_aware_diffusion", s.noise_aware_diffusion);
   s.cell_size_wtrig = param<double>(nh, "cell_size", s.cell_size_wtrig);
   s.map_size_m = param<double>(nh, "map_size", s.map_size_m);
   s.splat_sigma_wtrig = param<double>(nh, "splat_sigma", s.splat_sigma_wtrig);
@@ -263,6 +265,7 @@ EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
   }
   config.slam = loadEbslam3dConfig(nh, base);
   std::vector<double> start;
+  ebslam_msgs::markParamRead(nh, "initial_pose");
   if (nh.getParam("initial_pose", start)) {
     if (start.size() != 6) fail(nh, "initial_pose", "must be [x, y, z, roll, pitch, yaw]");
     for (double v : start) {
@@ -450,8 +453,15 @@ EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
   c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
+  c.align_frame = param<std::string>(nh, "align_frame", c.align_frame);
   c.path_length = param<int>(nh, "path_length", c.path_length);
   if (c.trajectory.empty()) fail(nh, "trajectory", "is not set (nor in a ~scenario file)");
+  if (!c.align_frame.empty()) {
+    requireFrame(nh, "align_frame", c.align_frame);
+    if (c.align_frame == c.map_frame || c.align_frame == c.ground_truth_frame) {
+      fail(nh, "align_frame", "must differ from ~map_frame and ~ground_truth_frame");
+    }
+  }
   requirePositive(c.ceiling_height_m, nh, "ceiling_distance");
   if (texture_seed < 0) fail(nh, "texture_seed", "must not be negative");
   if (seed < 0) fail(nh, "seed", "must not be negative");

@@ -83,8 +83,8 @@ TEST(EventInput, ReportsAPause) {
 TEST(EventInput, DropsEventsOfTimeZero) {
   EventInputGuard guard({128, 128}, 1000, 1000000);
   guard.take(array({event(kBase, 1, 1)}));
-  const EventInputResult r = guard.take(array({event(kBase + 10, 1, 1), event(0, 2, 2),
-                                               event(kBase + 20, 3, 3)}));
+  const EventInputResult r =
+      guard.take(array({event(kBase + 10, 1, 1), event(0, 2, 2), event(kBase + 20, 3, 3)}));
   EXPECT_EQ(r.zero_time, 1u);
   EXPECT_EQ(r.gap_us, 0);
   ASSERT_EQ(r.segments.size(), 1u);

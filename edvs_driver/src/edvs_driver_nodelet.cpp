@@ -21,6 +21,7 @@
 #include <optional>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_msgs/ros_param_helpers.h"
 #include "edvs/link_supervisor.h"
 #include "edvs_driver/EdvsConfig.h"
 #include "edvs_driver/ros_params.h"
@@ -71,12 +72,9 @@ class EdvsDriverNodelet : public nodelet::Nodelet {
 void EdvsDriverNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
-  try {
-    params_ = loadDriverParams(pnh);
-  } catch (const std::invalid_argument& e) {
-    NODELET_FATAL("edvs_driver: %s", e.what());
-    throw;
-  }
+  // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
+  ebslam_msgs::startOrFail(pnh, "edvs_driver " + getName(),
+                           [&] { params_ = loadDriverParams(pnh); });
   batch_size_ = params_.batch_size;
   publish_rate_hz_ = params_.publish_rate_hz;
 

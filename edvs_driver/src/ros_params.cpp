@@ -1,5 +1,7 @@
 #include "edvs_driver/ros_params.h"
 
+#include <ebslam_msgs/ros_param_helpers.h>
+
 #include <stdexcept>
 
 namespace edvs_driver {
@@ -47,36 +49,40 @@ void validate(const DriverParams& p) {
 
 DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
   DriverParams p;
-  p.device.uri = pnh.param<std::string>("uri", p.device.uri);
-  const std::string firmware = pnh.param<std::string>("firmware", "current");
+  p.device.uri = ebslam_msgs::param<std::string>(pnh, "uri", p.device.uri);
+  const std::string firmware = ebslam_msgs::param<std::string>(pnh, "firmware", "current");
   const auto fw = parseFirmware(firmware);
-  if (!fw) bad("firmware", "'" + firmware + "' is not current or legacy");
+  if (!fw) ebslam_msgs::failParam(pnh, "firmware", "'" + firmware + "' is not current or legacy");
   p.device.firmware = *fw;
-  const std::string format = pnh.param<std::string>("format", "E2");
+  const std::string format = ebslam_msgs::param<std::string>(pnh, "format", "E2");
   const auto f = parseEventFormat(format, p.device.firmware);
-  if (!f) bad("format", "'" + format + "' is not E0..E4 or none/delta/ts16/ts24/ts32");
+  if (!f)
+    ebslam_msgs::failParam(pnh, "format",
+                           "'" + format + "' is not E0..E4 or none/delta/ts16/ts24/ts32");
   p.device.format = *f;
-  const std::string sync = pnh.param<std::string>("sync_mode", "none");
+  const std::string sync = ebslam_msgs::param<std::string>(pnh, "sync_mode", "none");
   const auto s = parseSyncMode(sync);
-  if (!s) bad("sync_mode", "'" + sync + "' is not none, master or slave");
+  if (!s) ebslam_msgs::failParam(pnh, "sync_mode", "'" + sync + "' is not none, master or slave");
   p.device.sync = *s;
-  p.device.on_bit = pnh.param("on_bit", p.device.on_bit);
-  p.device.banner_timeout_ms = pnh.param("banner_timeout", p.device.banner_timeout_ms);
-  p.device.command_gap_ms = pnh.param("command_gap", p.device.command_gap_ms);
+  p.device.on_bit = ebslam_msgs::param(pnh, "on_bit", p.device.on_bit);
+  p.device.banner_timeout_ms =
+      ebslam_msgs::param(pnh, "banner_timeout", p.device.banner_timeout_ms);
+  p.device.command_gap_ms = ebslam_msgs::param(pnh, "command_gap", p.device.command_gap_ms);
   p.device.infer_wraps_from_host_time =
-      pnh.param("infer_wraps_from_host_time", p.device.infer_wraps_from_host_time);
-  if (p.device.command_gap_ms < 0) bad("command_gap", "must be >= 0 ms");
-  p.frame_id = pnh.param<std::string>("frame_id", p.frame_id);
-  p.camera_name = pnh.param<std::string>("camera_name", p.camera_name);
-  p.camera_info_url = pnh.param<std::string>("camera_info_url", p.camera_info_url);
-  p.publish_rate_hz = pnh.param("publish_rate", p.publish_rate_hz);
-  p.batch_size = pnh.param("batch_size", p.batch_size);
-  p.link.reconnect_min_s = pnh.param("reconnect_min_delay", p.link.reconnect_min_s);
-  p.link.reconnect_max_s = pnh.param("reconnect_max_delay", p.link.reconnect_max_s);
-  p.stall_warn_s = pnh.param("stall_timeout", p.stall_warn_s);
-  p.link.stall_reconnect_s = pnh.param("stall_reconnect_timeout", p.link.stall_reconnect_s);
+      ebslam_msgs::param(pnh, "infer_wraps_from_host_time", p.device.infer_wraps_from_host_time);
+  if (p.device.command_gap_ms < 0) ebslam_msgs::failParam(pnh, "command_gap", "must be >= 0 ms");
+  p.frame_id = ebslam_msgs::param<std::string>(pnh, "frame_id", p.frame_id);
+  p.camera_name = ebslam_msgs::param<std::string>(pnh, "camera_name", p.camera_name);
+  p.camera_info_url = ebslam_msgs::param<std::string>(pnh, "camera_info_url", p.camera_info_url);
+  p.publish_rate_hz = ebslam_msgs::param(pnh, "publish_rate", p.publish_rate_hz);
+  p.batch_size = ebslam_msgs::param(pnh, "batch_size", p.batch_size);
+  p.link.reconnect_min_s = ebslam_msgs::param(pnh, "reconnect_min_delay", p.link.reconnect_min_s);
+  p.link.reconnect_max_s = ebslam_msgs::param(pnh, "reconnect_max_delay", p.link.reconnect_max_s);
+  p.stall_warn_s = ebslam_msgs::param(pnh, "stall_timeout", p.stall_warn_s);
+  p.link.stall_reconnect_s =
+      ebslam_msgs::param(pnh, "stall_reconnect_timeout", p.link.stall_reconnect_s);
   for (int i = 0; i < kNumBiases; ++i) {
-    const int v = pnh.param(std::string("bias_") + biasName(i), -1);
+    const int v = ebslam_msgs::param(pnh, std::string("bias_") + biasName(i), -1);
     if (v >= 0) p.link.biases[static_cast<std::size_t>(i)] = v;
   }
   // The URI is parsed here too, so a typo fails at start-up with the parameter's name; its
@@ -89,9 +95,17 @@ DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
       throw std::logic_error("not opened");
     });
   } catch (const std::invalid_argument& e) {
-    bad("uri", e.what());
+    ebslam_msgs::failParam(pnh, "uri", std::string(": ") + e.what());
   }
-  validate(p);
+  try {
+    validate(p);
+  } catch (const std::invalid_argument& e) {
+    // validate() names parameters as ~name; a log needs the full name.
+    std::string message = e.what();
+    const std::string::size_type tilde = message.find('~');
+    if (tilde != std::string::npos) message.replace(tilde, 1, pnh.getNamespace() + "/");
+    throw std::invalid_argument(message);
+  }
   return p;
 }
 

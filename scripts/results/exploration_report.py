@@ -224,7 +224,8 @@ def plot_paths(runs, layouts, seeds, plans, fig_dir):
     # Pictures like fig. 7.10 (one per layout, first seed) and fig. 7.9 (maps of the first layout).
     lines = []
     for layout in layouts:
-        s = seeds[0]
+        # The first seed with a gain run on this layout.
+        s = next((x for x in seeds if (layout, "gain", x) in runs), seeds[0])
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.8))
         for ax, method in zip(axes, ("gain", "random")):
             r = runs.get((layout, method, s))
@@ -261,7 +262,8 @@ def plot_maps(runs, layouts, seeds, plans, fig_dir):
     """Z, E and the gain at the end of the first layout's first gain run."""
     result = {}
     layout = layouts[0]
-    r = runs.get((layout, "gain", seeds[0]))
+    seed = next((x for x in seeds if (layout, "gain", x) in runs), seeds[0])
+    r = runs.get((layout, "gain", seed))
     if r is not None:
         hexes = read_csv(r["stem"] + "_hex.csv")
         xy = np.array([(float(h["x"]), float(h["y"])) for h in hexes])
@@ -291,7 +293,7 @@ def plot_maps(runs, layouts, seeds, plans, fig_dir):
         fig.tight_layout()
         fig.savefig(os.path.join(fig_dir, "maps.png"), dpi=80)
         plt.close(fig)
-        result["maps"] = [f"{layout}, seed {seeds[0]}: true path (red), last planned path (magenta); blocked cells blue and bumps orange in E.", "",
+        result["maps"] = [f"{layout}, seed {seed}: true path (red), last planned path (magenta); blocked cells blue and bumps orange in E.", "",
                           "![maps](exploration/maps.png)"]
     return result
 

@@ -7,7 +7,9 @@
 
 Usage: workspace_checks.py [JUNIT_XML]   (writes a JUnit file when given; exit 1 on a failure)
 """
+import glob
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -71,6 +73,36 @@ class PackageDepsTest(unittest.TestCase):
                                      "dasp: component 'OpenCV:ximgproc'")
 
 
+def launch_files():
+    files = glob.glob(os.path.join(REPO, "*", "launch", "*.launch"))
+    return sorted(files)
+
+
+class LaunchDocTest(unittest.TestCase):
+    def test_every_arg_has_doc(self):
+        missing = []
+        files = launch_files()
+        self.assertGreater(len(files), 10)
+        for path in files:
+            for arg in ET.parse(path).getroot().iter("arg"):
+                # An arg with value= is a constant of the file, not something a user sets.
+                if "value" in arg.attrib:
+                    continue
+                if not arg.get("doc", "").strip():
+                    missing.append(f"{os.path.relpath(path, REPO)}: arg {arg.get('name')}")
+        self.assertEqual(missing, [], "launch args without doc=:\n" + "\n".join(missing))
+
+    def test_launch_files_find_their_files_through_packages(self):
+        # $(dirname) and relative paths break in the install space; $(find pkg) does not.
+        bad = []
+        for path in launch_files():
+            with open(path) as f:
+                for number, line in enumerate(f, 1):
+                    if re.search(r"\$\(dirname\)|\.\./", line):
+                        bad.append(f"{os.path.relpath(path, REPO)}:{number}: {line.strip()}")
+        self.assertEqual(bad, [], "\n".join(bad))
+
+
 def write_junit(result, tests, path):
     suite = ET.Element("testsuite", name="workspace_checks", tests=str(len(tests)))
     failed = {t.id(): m for t, m in result.failures + result.errors}
@@ -85,7 +117,8 @@ def write_junit(result, tests, path):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(PackageDepsTest)])
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(PackageDepsTest),
+                                loader.loadTestsFromTestCase(LaunchDocTest)])
     tests = [test for group in suite for test in group]
     result = unittest.TextTestRunner(verbosity=2).run(suite)
     if len(sys.argv) > 1:

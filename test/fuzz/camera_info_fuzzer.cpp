@@ -28,9 +28,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const sensor_msgs::Image depth =
       dasp_ros::toDepthImageMsg(cv::Mat(3, 4, CV_16UC1, cv::Scalar(1500)), info.header);
   try {
-    dasp_ros::RgbdInput::convert(color, depth, info,
-                                 {"rgb/image_rect_color", "depth_registered/image_raw",
-                                  "rgb/camera_info"});
+    dasp_ros::RgbdInput::convert(
+        color, depth, info,
+        {"rgb/image_rect_color", "depth_registered/image_raw", "rgb/camera_info"});
   } catch (const dasp_ros::InputError&) {
   }
   return 0;

@@ -22,7 +22,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::int64_t last_t_us = std::numeric_limits<std::int64_t>::min();
   while (pos < size) {
     ebslam_msgs::EventArray msg;
-    const std::size_t used = fuzz::readMessage<ebslam_msgs::EventArray_>(data + pos, size - pos, msg);
+    const std::size_t used =
+        fuzz::readMessage<ebslam_msgs::EventArray_>(data + pos, size - pos, msg);
     if (used == 0) break;
     pos += used;
     const ebslam::EventVector events = ebslam_msgs::fromMsg(msg);

@@ -47,7 +47,8 @@ bool operator!=(const CappedAllocator<T>&, const CappedAllocator<U>&) {
 /// Reads one message of type Msg<std::allocator<void>> from data[0, size); returns the bytes it
 /// used, 0 when the bytes are no such message (too short, or arrays longer than the input).
 template <template <class> class Msg>
-std::size_t readMessage(const std::uint8_t* data, std::size_t size, Msg<std::allocator<void>>& out) {
+std::size_t readMessage(const std::uint8_t* data, std::size_t size,
+                        Msg<std::allocator<void>>& out) {
   namespace ser = ros::serialization;
   if (size == 0 || size > 0xFFFFFFFFu) return 0;
   auto* bytes = const_cast<std::uint8_t*>(data);  // IStream reads only

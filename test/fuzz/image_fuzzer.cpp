@@ -44,7 +44,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   info.K = {525.0, 0.0, 319.5, 0.0, 525.0, 239.5, 0.0, 0.0, 1.0};
   try {
     const dasp::RgbdFrame frame = dasp_ros::RgbdInput::convert(
-        image, image, info, {"rgb/image_rect_color", "depth_registered/image_raw", "rgb/camera_info"});
+        image, image, info,
+        {"rgb/image_rect_color", "depth_registered/image_raw", "rgb/camera_info"});
     checkSize(frame.color, image, CV_8UC3);
     checkSize(frame.depth, image, CV_16UC1);
   } catch (const dasp_ros::InputError&) {

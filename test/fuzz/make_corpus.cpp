@@ -9,9 +9,9 @@
 
 #include <cstdio>
 #include <cstring>
-#include <limits>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -27,7 +27,8 @@ using Bytes = std::vector<std::uint8_t>;
 void write(const fs::path& folder, const std::string& name, const Bytes& bytes) {
   fs::create_directories(folder);
   std::ofstream out(folder / ("seed_" + name), std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 Bytes operator+(Bytes a, const Bytes& b) {
@@ -99,7 +100,8 @@ int main(int argc, char** argv) {
   rgb.encoding = "rgb8";
   write(images, "rgb8", fuzz::toBytes(rgb));
   write(images, "depth16",
-        fuzz::toBytes(dasp_ros::toDepthImageMsg(cv::Mat(3, 4, CV_16UC1, cv::Scalar(1234)), header())));
+        fuzz::toBytes(
+            dasp_ros::toDepthImageMsg(cv::Mat(3, 4, CV_16UC1, cv::Scalar(1234)), header())));
   sensor_msgs::Image metres = dasp_ros::toDepthImageMsg(cv::Mat(3, 4, CV_16UC1), header());
   metres.encoding = "32FC1";
   metres.step = 16;

@@ -27,10 +27,10 @@ struct EventSegment {
 struct EventInputResult {
   bool size_mismatch = false;  ///< message rejected: width x height differs from the sensor
   std::vector<EventSegment> segments;
-  std::size_t outside = 0;  ///< events dropped for lying outside width x height
-  std::size_t clamped = 0;  ///< events whose time was clamped to their predecessor's
+  std::size_t outside = 0;    ///< events dropped for lying outside width x height
+  std::size_t clamped = 0;    ///< events whose time was clamped to their predecessor's
   std::size_t zero_time = 0;  ///< events dropped for ts = 0 (unset; below 0.5 us counts as 0)
-  std::int64_t gap_us = 0;  ///< pause before this message when longer than the warning [us]
+  std::int64_t gap_us = 0;    ///< pause before this message when longer than the warning [us]
 };
 
 class EventInputGuard {

@@ -5,6 +5,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <ebslam/trajectory.h>
@@ -25,12 +26,18 @@ class GroundTruthPublisher {
   /// and someone listens (the callers throttle it: the path grows with every pose).
   void publish(const ebslam::StampedPose& pose, const ros::Time& stamp, bool path_due);
 
+  /// Publishes the static transform map_frame -> `frame` at `start` projected on the floor (x, y
+  /// and the yaw of the body's x axis; z = 0): the frame an estimator starting at its own origin
+  /// shares with the ground truth.
+  void publishAlignedFrame(const ebslam::StampedPose& start, const std::string& frame);
+
  private:
   std::string map_frame_, ground_truth_frame_;
   std::size_t path_length_;
   std::deque<geometry_msgs::PoseStamped> path_;
   ros::Publisher pose_pub_, path_pub_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
 };
 
 }  // namespace ebslam_ros

@@ -125,8 +125,8 @@ class PoseFilterNode {
   // Counters for diagnostics (since start).
   std::uint64_t messages_ = 0, events_in_ = 0, empty_messages_ = 0, rejected_size_ = 0,
                 rejected_frame_ = 0, outside_ = 0, clamped_ = 0, restarts_ = 0, gaps_ = 0,
-                zero_time_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0,
-                denoiser_passed_ = 0, denoiser_removed_ = 0;
+                zero_time_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0, denoiser_passed_ = 0,
+                denoiser_removed_ = 0;
   std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
   // Per-message problems, logged at most every 5 s of wall time.
   WallThrottle restart_log_{5.0}, gap_log_{5.0}, zero_time_log_{5.0};

@@ -197,7 +197,11 @@ struct EventSimulatorNodeConfig {
   std::string frame_id = "edvs_optical_frame";      ///< ~frame_id
   std::string map_frame = "map";                    ///< ~map_frame
   std::string ground_truth_frame = "ground_truth";  ///< ~ground_truth_frame
-  int path_length = 10000;                          ///< ~path_length
+  /// ~align_frame: when set, published once as a static child of map_frame at the ground truth's
+  /// start pose (planar: x, y, yaw), so an estimator whose map is this frame and which starts at
+  /// its origin (initial_pose 0 0 0) draws its path over the ground truth's. "" = none.
+  std::string align_frame;
+  int path_length = 10000;  ///< ~path_length
 };
 /// The parameters a scenario file may hold.
 extern const std::vector<std::string> kScenarioKeys;

@@ -41,6 +41,13 @@ void TrackingMonitorConfig::validate() const {
   if (!(std::isfinite(recovered_ratio) && recovered_ratio >= lost_ratio)) {
     fail("recovered_ratio must be >= lost_ratio");
   }
+  if (!(std::isfinite(lost_ratio_high) && lost_ratio_high >= 1.0)) {
+    fail("lost_ratio_high must be >= 1");
+  }
+  if (!(std::isfinite(recovered_ratio_high) && recovered_ratio_high >= recovered_ratio &&
+        recovered_ratio_high <= lost_ratio_high)) {
+    fail("recovered_ratio_high must lie in [recovered_ratio, lost_ratio_high]");
+  }
   if (!(std::isfinite(recovered_contrast) && recovered_contrast >= lost_contrast)) {
     fail("recovered_contrast must be >= lost_contrast");
   }
@@ -132,12 +139,14 @@ TrackingState TrackingMonitor::update(double now_s, const Event* events, std::si
     }
   }
   last_time_s_ = now_s;
-  if (average_ < std::max(config_.lost_contrast, config_.lost_ratio * reference_)) {
+  if (average_ < std::max(config_.lost_contrast, config_.lost_ratio * reference_) ||
+      average_ > config_.lost_ratio_high * reference_) {
     if (below_since_s_ < 0.0) below_since_s_ = now_s;
   } else {
     below_since_s_ = -1.0;
   }
-  if (average_ > std::max(config_.recovered_contrast, config_.recovered_ratio * reference_)) {
+  if (average_ > std::max(config_.recovered_contrast, config_.recovered_ratio * reference_) &&
+      average_ < config_.recovered_ratio_high * reference_) {
     if (above_since_s_ < 0.0) above_since_s_ = now_s;
   } else {
     above_since_s_ = -1.0;

@@ -70,6 +70,32 @@ TEST(TrackingMonitor, TellsATrackedFromALostEstimateAndRecovers) {
   EXPECT_EQ(monitor.collapses(), 1u);
 }
 
+TEST(TrackingMonitor, AContrastFarAboveTheReferenceIsACollapseToo) {
+  const CeilingCamera camera{CameraModel{}};
+  GridMap2f map = striped();
+  TrackingMonitor monitor(TrackingMonitorConfig{}, camera);
+  const Pose2 truth{0.4, -0.2, 0.3};
+  const EventVector events = eventsAt(camera, map, truth, 600);  // a part of the view
+  double t = 0.0;
+  for (int k = 0; k < 400; ++k, t += 0.05) monitor.update(t, events, truth, map);
+  const double reference = monitor.reference();
+  ASSERT_GT(reference, 2.0);
+  // The cells under the events grow fourfold (as where a lost estimate keeps writing its own
+  // events into the map): the events' contrast more than doubles.
+  const double c = std::cos(truth.theta), s = std::sin(truth.theta);
+  for (const Event& e : events) {
+    const std::size_t p = static_cast<std::size_t>(e.y) * camera.width() + e.x;
+    const double ox = camera.offsetX()[p], oy = camera.offsetY()[p];
+    const double x = truth.x + c * ox - s * oy, y = truth.y + s * ox + c * oy;
+    map.at(static_cast<int>((x - map.origin_x_m) / map.resolution_m),
+           static_cast<int>((y - map.origin_y_m) / map.resolution_m)) = 4.0f;
+  }
+  for (int k = 0; k < 40; ++k, t += 0.05) monitor.update(t, events, truth, map);
+  EXPECT_GT(monitor.contrast(), 2.0 * reference);
+  EXPECT_EQ(monitor.state(), TrackingState::kLost);
+  EXPECT_EQ(monitor.collapses(), 1u);
+}
+
 TEST(TrackingMonitor, GivesNoVerdictOnFewEventsOrAnUnmappedView) {
   const CeilingCamera camera{CameraModel{}};
   const GridMap2f map = striped();

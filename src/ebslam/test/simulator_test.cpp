@@ -545,8 +545,7 @@ TEST(FloorRobotTrajectory, PioneerRunsBecomePlanarPaths) {
     const FloorRegion region = visibleCeilingRegion(floor, CameraModel());
     EXPECT_GT((region.max - region.min).minCoeff(), min_region_m);
   };
-  check(std::string(EBSLAM_SAMPLE_SESSION_DIR) + "/pioneer_360_excerpt.txt", 11.9, 1.5, 6.0,
-        2.5);
+  check(std::string(EBSLAM_SAMPLE_SESSION_DIR) + "/pioneer_360_excerpt.txt", 11.9, 1.5, 6.0, 2.5);
   const std::filesystem::path file = std::filesystem::path(EBSLAM_SHARED_DATA_DIR) /
                                      "tum-groundtruth" /
                                      "rgbd_dataset_freiburg2_pioneer_360-groundtruth.txt";

@@ -111,10 +111,9 @@ TEST(Trajectory, ReadsRealTumGroundTruth) {
 // The shipped TUM excerpts and, when ../shared has them, all six TUM ground-truth files read
 // cleanly (repeated timestamps dropped) and validate.
 TEST(Trajectory, ReadsAllRealTumFiles) {
-  for (const auto& [name, poses] : {std::pair<const char*, std::size_t>{"pioneer_360", 3599},
-                                    {"freiburg1_xyz", 450}}) {
-    const std::string file =
-        std::string(EBSLAM_SAMPLE_SESSION_DIR) + "/" + name + "_excerpt.txt";
+  for (const auto& [name, poses] :
+       {std::pair<const char*, std::size_t>{"pioneer_360", 3599}, {"freiburg1_xyz", 450}}) {
+    const std::string file = std::string(EBSLAM_SAMPLE_SESSION_DIR) + "/" + name + "_excerpt.txt";
     Trajectory trajectory;
     EXPECT_NO_THROW(trajectory = readTumTrajectory(file)) << file;
     EXPECT_EQ(trajectory.size(), poses) << file;

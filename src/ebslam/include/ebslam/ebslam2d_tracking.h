@@ -40,6 +40,13 @@ struct TrackingMonitorConfig {
   /// collapse (contrast 7-9 before, 2.2-3.7 during it; 4.6 at the lowest while tracking).
   double lost_ratio = 0.5;
   double recovered_ratio = 0.7;
+  /// A contrast far above the reference is a collapse too: a lost estimate's events soon land on
+  /// the map they have just written at the wrong pose (two_rooms seed 5: 5 -> 17 at its collapse;
+  /// while tracking it stayed within 1.5 times the reference). Above lost_ratio_high times the
+  /// reference counts like below lost_ratio; tracking again needs it below
+  /// recovered_ratio_high times the reference.
+  double lost_ratio_high = 2.0;
+  double recovered_ratio_high = 1.5;
   double lost_contrast = 1.6;
   double lost_after_s = 0.5;
   double recovered_contrast = 2.2;
