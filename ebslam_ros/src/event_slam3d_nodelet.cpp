@@ -206,6 +206,9 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       start.sigma_position = config_.slam.sigma_position_m;
       start.sigma_rotation = config_.slam.sigma_rotation_rad;
       start.score_alpha = config_.slam.score_alpha;
+      start.sigma_position_time = config_.slam.sigma_position_per_sqrt_s;
+      start.sigma_rotation_time = config_.slam.sigma_rotation_per_sqrt_s;
+      start.max_event_rate = config_.slam.max_event_rate;
       reconfigure_->updateConfig(start);
       reconfigure_->setCallback(
           [this](EventSlam3dKnobsConfig& k, std::uint32_t level) { onReconfigure(k, level); });
@@ -520,6 +523,9 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     next.sigma_position_m = k.sigma_position;
     next.sigma_rotation_rad = k.sigma_rotation;
     next.score_alpha = k.score_alpha;
+    next.sigma_position_per_sqrt_s = k.sigma_position_time;
+    next.sigma_rotation_per_sqrt_s = k.sigma_rotation_time;
+    next.max_event_rate = k.max_event_rate;
     try {
       next.validate();
       if (slam_) slam_->setConfig(next);
@@ -540,6 +546,10 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       status.summary(DiagnosticStatus::WARN, "bad input since the last report (see the log)");
     } else if (!slam_) {
       status.summary(DiagnosticStatus::OK, "waiting for events");
+    } else if (slam_->health().state == ebslam::TrackingState3d::kLost) {
+      status.summary(DiagnosticStatus::WARN, "lost: the events stopped fitting the map");
+    } else if (slam_->health().state == ebslam::TrackingState3d::kRecovering) {
+      status.summary(DiagnosticStatus::WARN, "recovering: the events fit the map again");
     } else {
       status.summary(DiagnosticStatus::OK, "tracking");
     }
@@ -561,6 +571,12 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
     status.add("last pose latency [s]", last_latency_s_);
     status.add("particles", config_.slam.num_particles);
     if (slam_) {
+      const ebslam::TrackingHealth& health = slam_->health();
+      status.add("tracking state", ebslam::toString(health.state));
+      status.add("effective sample size share", health.ess_share);
+      status.add("fit ratio (fast / slow)", health.fit_ratio);
+      status.add("times lost", health.lost_count);
+      status.add("time lost [s of event time]", health.time_lost_s);
       status.add("map chunks", slam_->map().chunkCount());
       status.add("map memory [MiB]", static_cast<double>(slam_->memoryBytes()) / (1024.0 * 1024.0));
       status.add("map chunks evicted", slam_->map().evictedChunks());

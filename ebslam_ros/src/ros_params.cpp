@@ -207,6 +207,11 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
   c.event_share = param<double>(nh, "event_share", c.event_share);
   c.sigma_position_m = param<double>(nh, "sigma_position", c.sigma_position_m);
   c.sigma_rotation_rad = param<double>(nh, "sigma_rotation", c.sigma_rotation_rad);
+  c.sigma_position_per_sqrt_s =
+      param<double>(nh, "sigma_position_time", c.sigma_position_per_sqrt_s);
+  c.sigma_rotation_per_sqrt_s =
+      param<double>(nh, "sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+  c.max_event_rate = param<double>(nh, "max_event_rate", c.max_event_rate);
   c.score_alpha = param<double>(nh, "score_alpha", c.score_alpha);
   c.voxel_size_m = param<double>(nh, "voxel_size", c.voxel_size_m);
   c.splat_lambda = param<double>(nh, "splat_lambda", c.splat_lambda);
@@ -246,7 +251,19 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
 
 EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
   EventSlam3dNodeConfig config;
-  config.slam = loadEbslam3dConfig(nh, ebslam::Ebslam3dConfig::defaults());
+  // ~preset chooses the values the other parameters start from.
+  const std::string preset = param<std::string>(nh, "preset", "default");
+  ebslam::Ebslam3dConfig base;
+  if (preset == "default") {
+    base = ebslam::Ebslam3dConfig::defaults();
+  } else if (preset == "fast") {
+    base = ebslam::Ebslam3dConfig::fast();
+  } else if (preset == "thesis") {
+    base = ebslam::Ebslam3dConfig::thesis();
+  } else {
+    fail(nh, "preset", "= '" + preset + "' is not one of default, fast, thesis");
+  }
+  config.slam = loadEbslam3dConfig(nh, base);
   std::vector<double> start;
   ebslam_msgs::markParamRead(nh, "initial_pose");
   if (nh.getParam("initial_pose", start)) {

@@ -270,6 +270,51 @@ TEST_F(EventSlam3dTest, TracksThePathWithEventStampsFramesAndLazyOutputs) {
   }
   const double rmse = std::sqrt(sum_sq / static_cast<double>(poses_.size()));
   std::cout << poses_.size() << " poses, position RMSE " << rmse << " m, worst " << worst << " m\n";
+  // The same trajectory as the offline core on the same messages: the core with the node's
+  // parameters (the workspace yaml on top of the default preset) fed message by message.
+  {
+    ros::NodeHandle slam_nh("/slam");
+    ebslam::Ebslam3dConfig c = ebslam::Ebslam3dConfig::defaults();
+    c.num_particles = slam_nh.param("num_particles", c.num_particles);
+    c.batch_size = slam_nh.param("batch_size", c.batch_size);
+    c.resample_every = slam_nh.param("resample_every", c.resample_every);
+    c.event_share = slam_nh.param("event_share", c.event_share);
+    c.sigma_position_m = slam_nh.param("sigma_position", c.sigma_position_m);
+    c.sigma_rotation_rad = slam_nh.param("sigma_rotation", c.sigma_rotation_rad);
+    c.sigma_position_per_sqrt_s = slam_nh.param("sigma_position_time", c.sigma_position_per_sqrt_s);
+    c.sigma_rotation_per_sqrt_s = slam_nh.param("sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+    c.max_event_rate = slam_nh.param("max_event_rate", c.max_event_rate);
+    c.score_alpha = slam_nh.param("score_alpha", c.score_alpha);
+    c.voxel_size_m = slam_nh.param("voxel_size", c.voxel_size_m);
+    c.focal_px = slam_nh.param("focal_px", c.focal_px);
+    const Eigen::Isometry3d start = initialBase() * mount();
+    ebslam::Pose3 start_pose;
+    start_pose.position = start.translation();
+    start_pose.orientation = Eigen::Quaterniond(start.rotation());
+    ebslam::EventSlam3d offline(c, start_pose);
+    const std::size_t begin = indexOf(0.0), end = indexOf(kDurationS);
+    std::size_t k = 0;
+    double worst_difference = 0.0;
+    for (std::size_t i = begin; i < end; i += kEventsPerMessage, ++k) {
+      const ebslam_msgs::DepthEventArray msg = message(i, std::min(end, i + kEventsPerMessage), t0);
+      ebslam::PointEventVector events;
+      for (const auto& e : msg.events) {
+        events.push_back(
+            {ebslam_msgs::toMicroseconds(e.ts), Eigen::Vector3f(e.point.x, e.point.y, e.point.z)});
+      }
+      offline.process(events);
+      ASSERT_LT(k, poses_.size());
+      Eigen::Isometry3d core = Eigen::Isometry3d::Identity();
+      core.linear() = offline.estimate().orientation.normalized().toRotationMatrix();
+      core.translation() = offline.estimate().position;
+      const Eigen::Isometry3d base = core * mount().inverse();
+      const Eigen::Isometry3d node = fromMsg(poses_[k].pose.pose);
+      worst_difference =
+          std::max(worst_difference, (base.translation() - node.translation()).norm());
+    }
+    EXPECT_EQ(k, poses_.size());
+    EXPECT_LT(worst_difference, 1e-6) << "node and offline core differ";
+  }
   EXPECT_LT(rmse, 0.04);
   EXPECT_LT(worst, 0.08);
   // Covariance: symmetric, positive on the diagonal, small (particles within centimetres).

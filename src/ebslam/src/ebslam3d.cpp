@@ -9,11 +9,38 @@
 
 namespace ebslam {
 
+const char* toString(TrackingState3d state) {
+  switch (state) {
+    case TrackingState3d::kTracking:
+      return "tracking";
+    case TrackingState3d::kLost:
+      return "lost";
+    case TrackingState3d::kRecovering:
+      return "recovering";
+  }
+  return "unknown";
+}
+
 Ebslam3dConfig Ebslam3dConfig::fast() {
   Ebslam3dConfig c;
-  c.num_particles = 25;
-  c.batch_size = 5;
-  c.event_share = 0.25;
+  c.num_particles = 50;
+  c.batch_size = 10;
+  c.max_event_rate = 40000.0;
+  return c;
+}
+
+Ebslam3dConfig Ebslam3dConfig::thesis() {
+  Ebslam3dConfig c;
+  c.num_particles = 100;
+  c.batch_size = 3;
+  c.resample_every = 100;
+  c.event_share = 1.0;
+  c.max_event_rate = 0.0;
+  c.voxel_size_m = 0.01;
+  c.sigma_position_m = 1e-3;
+  c.sigma_rotation_rad = 1e-3;
+  c.sigma_position_per_sqrt_s = 0.0;
+  c.sigma_rotation_per_sqrt_s = 0.0;
   return c;
 }
 
@@ -31,6 +58,26 @@ void Ebslam3dConfig::validate() const {
   }
   if (!(sigma_rotation_rad >= 0.0 && sigma_rotation_rad < 1.0)) {
     fail("sigma_rotation_rad must be in [0, 1)");
+  }
+  if (!(max_event_rate >= 0.0) || !std::isfinite(max_event_rate)) {
+    fail("max_event_rate must be finite and >= 0");
+  }
+  if (!positive(rate_window_s)) fail("rate_window_s must be positive");
+  if (!(sigma_position_per_sqrt_s >= 0.0) || !std::isfinite(sigma_position_per_sqrt_s)) {
+    fail("sigma_position_per_sqrt_s must be finite and >= 0");
+  }
+  if (!(sigma_rotation_per_sqrt_s >= 0.0 && sigma_rotation_per_sqrt_s < 10.0)) {
+    fail("sigma_rotation_per_sqrt_s must be in [0, 10)");
+  }
+  if (!positive(max_diffusion_dt_s)) fail("max_diffusion_dt_s must be positive");
+  if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
+      !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
+      !std::isfinite(health.warmup_s)) {
+    fail("health: the times must be positive (warmup_s >= 0) and finite");
+  }
+  if (!(health.lost_ratio > 0.0 && health.lost_ratio <= health.recover_ratio &&
+        std::isfinite(health.recover_ratio))) {
+    fail("health: need 0 < lost_ratio <= recover_ratio (finite)");
   }
   if (!(score_alpha > 0.0 && score_alpha <= 1.0)) fail("score_alpha must be in (0, 1]");
   if (!positive(voxel_size_m)) fail("voxel_size_m must be positive");
@@ -130,8 +177,19 @@ Eigen::Matrix<double, 6, 6> ParticleSet3D::covariance(const Pose3& mean) const {
   return c;
 }
 
-void ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
-                         float sigma_position, float sigma_rotation, const BatchDecay& decay) {
+double ParticleSet3D::essShare() const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0, squares = 0.0;
+  for (double s : w) {
+    total += s;
+    squares += s * s;
+  }
+  if (!(total > 0.0) || !std::isfinite(total) || !(squares > 0.0)) return 1.0;
+  return total * total / squares / static_cast<double>(w.size());
+}
+
+float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
+                          float sigma_position, float sigma_rotation, const BatchDecay& decay) {
   const std::size_t n = x_.size();
   // Scratch, structure of arrays of n floats each: 7 normals, 9 rotation entries, 3 voxel
   // coordinates (as int32), the score sums.
@@ -223,7 +281,12 @@ void ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const Chunked
   }
   const double factor = scores_.beginUpdate(decay);
   std::vector<double>& stored = scores_.stored();
-  for (std::size_t i = 0; i < n; ++i) stored[i] += factor * static_cast<double>(sums[i]);
+  float best = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    stored[i] += factor * static_cast<double>(sums[i]);
+    best = std::max(best, sums[i]);
+  }
+  return best;
 }
 
 bool ParticleSet3D::resampleSystematic() {
@@ -290,6 +353,13 @@ void EventSlam3d::reset(const Pose3& start) {
   in_batch_ = 0;
   share_accumulator_ = 0.0;
   since_resample_ = 0;
+  have_prev_batch_ = false;
+  rate_window_open_ = false;
+  rate_window_count_ = 0;
+  rate_share_ = 1.0;
+  health_ = TrackingHealth{};
+  health_started_ = false;
+  above_recover_s_ = 0.0;
   last_t_us_ = std::numeric_limits<std::int64_t>::min();
 }
 
@@ -333,12 +403,32 @@ EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::si
       ++stats.rejected;
       continue;
     }
-    share_accumulator_ += config_.event_share;
+    if (config_.max_event_rate > 0.0) {
+      // The share for this window comes from the previous window's rate, so that the events
+      // kept are spread evenly over it (a token bucket would keep each burst's first events).
+      const std::int64_t t_us = events[i].t_us;
+      if (!rate_window_open_) {
+        rate_window_open_ = true;
+        rate_window_start_us_ = t_us;
+        rate_window_count_ = 0;
+      } else if (static_cast<double>(t_us - rate_window_start_us_) >= 1e6 * config_.rate_window_s) {
+        const double span_s = 1e-6 * static_cast<double>(t_us - rate_window_start_us_);
+        const double rate = static_cast<double>(rate_window_count_) / span_s;
+        rate_share_ = rate > config_.max_event_rate ? config_.max_event_rate / rate : 1.0;
+        rate_window_start_us_ = t_us;
+        rate_window_count_ = 0;
+      }
+      ++rate_window_count_;
+    } else {
+      rate_share_ = 1.0;
+    }
+    share_accumulator_ += config_.event_share * rate_share_;
     if (share_accumulator_ < 1.0) {
       ++stats.skipped;
       continue;
     }
     share_accumulator_ -= 1.0;
+    batch_end_us_ = events[i].t_us;
     batch_[in_batch_++] = p;
     ++stats.used;
     if (in_batch_ == config_.batch_size) runBatch(in_batch_);
@@ -350,9 +440,22 @@ EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::si
 
 void EventSlam3d::runBatch(int b) {
   in_batch_ = 0;
-  const float root_b = std::sqrt(static_cast<float>(b));
-  particles_.step(batch_, b, map_, static_cast<float>(config_.sigma_position_m) * root_b,
-                  static_cast<float>(config_.sigma_rotation_rad) * root_b, batch_decay_[b - 1]);
+  // Diffusion: B events' worth (per-event part) plus the event time the batch spans (per-time
+  // part), as variances.
+  double dt_s = 0.0;
+  if (have_prev_batch_) {
+    dt_s = std::min(config_.max_diffusion_dt_s,
+                    1e-6 * static_cast<double>(batch_end_us_ - prev_batch_end_us_));
+  }
+  prev_batch_end_us_ = batch_end_us_;
+  have_prev_batch_ = true;
+  const double var_p = b * config_.sigma_position_m * config_.sigma_position_m +
+                       dt_s * config_.sigma_position_per_sqrt_s * config_.sigma_position_per_sqrt_s;
+  const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad +
+                       dt_s * config_.sigma_rotation_per_sqrt_s * config_.sigma_rotation_per_sqrt_s;
+  const float best = particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
+                                     static_cast<float>(std::sqrt(var_r)), batch_decay_[b - 1]);
+  updateHealth(best, b, dt_s);
   processed_ += static_cast<std::uint64_t>(b);
   since_resample_ += b;
   expected_ = particles_.weightedMean();
@@ -374,6 +477,53 @@ void EventSlam3d::runBatch(int b) {
   if (since_resample_ >= config_.resample_every) {
     particles_.resampleSystematic();
     since_resample_ -= config_.resample_every;
+  }
+}
+
+void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
+  const TrackingHealthConfig& c = config_.health;
+  TrackingHealth& h = health_;
+  h.ess_share = particles_.essShare();
+  const double fit = static_cast<double>(best_sum) / b;
+  if (!health_started_) {
+    health_started_ = true;
+    h.fit_fast = fit;
+    h.fit_slow = fit;
+    health_start_us_ = batch_end_us_;
+  } else {
+    h.fit_fast += (1.0 - std::exp(-dt_s / c.fast_time_s)) * (fit - h.fit_fast);
+    // Frozen unless tracking: the reference is how well the events fitted while on track.
+    if (h.state == TrackingState3d::kTracking) {
+      h.fit_slow += (1.0 - std::exp(-dt_s / c.slow_time_s)) * (h.fit_fast - h.fit_slow);
+    }
+  }
+  h.fit_ratio = h.fit_slow > 0.0 ? h.fit_fast / h.fit_slow : 1.0;
+  if (h.state == TrackingState3d::kLost) h.time_lost_s += dt_s;
+  if (1e-6 * static_cast<double>(batch_end_us_ - health_start_us_) < c.warmup_s) return;
+  switch (h.state) {
+    case TrackingState3d::kTracking:
+      if (h.fit_ratio < c.lost_ratio) {
+        h.state = TrackingState3d::kLost;
+        ++h.lost_count;
+      }
+      break;
+    case TrackingState3d::kLost:
+      if (h.fit_ratio >= c.recover_ratio) {
+        h.state = TrackingState3d::kRecovering;
+        above_recover_s_ = 0.0;
+      }
+      break;
+    case TrackingState3d::kRecovering:
+      if (h.fit_ratio < c.lost_ratio) {
+        h.state = TrackingState3d::kLost;
+        ++h.lost_count;
+      } else if (h.fit_ratio >= c.recover_ratio) {
+        above_recover_s_ += dt_s;
+        if (above_recover_s_ >= c.recover_hold_s) h.state = TrackingState3d::kTracking;
+      } else {
+        above_recover_s_ = 0.0;
+      }
+      break;
   }
 }
 

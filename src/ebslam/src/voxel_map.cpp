@@ -162,12 +162,37 @@ bool ChunkedVoxelMap::addGaussian(const Eigen::Vector3f& p, float sigma_m, float
   return true;
 }
 
+void ChunkedVoxelMap::unlinkLru(std::uint32_t slot) {
+  const std::uint32_t prev = lru_prev_[slot], next = lru_next_[slot];
+  if (prev != kNoSlot) {
+    lru_next_[prev] = next;
+  } else {
+    lru_head_ = next;
+  }
+  if (next != kNoSlot) {
+    lru_prev_[next] = prev;
+  } else {
+    lru_tail_ = prev;
+  }
+}
+
+void ChunkedVoxelMap::pushLruFront(std::uint32_t slot) {
+  lru_prev_[slot] = kNoSlot;
+  lru_next_[slot] = lru_head_;
+  if (lru_head_ != kNoSlot) lru_prev_[lru_head_] = slot;
+  lru_head_ = slot;
+  if (lru_tail_ == kNoSlot) lru_tail_ = slot;
+}
+
 float* ChunkedVoxelMap::chunkFor(std::uint64_t key) {
-  ++tick_;
   const std::int32_t found = findSlot(key);
   if (found >= 0) {
-    slot_written_[static_cast<std::size_t>(found)] = tick_;
-    return chunks_[static_cast<std::size_t>(found)]->data();
+    const auto slot = static_cast<std::uint32_t>(found);
+    if (slot != lru_head_) {
+      unlinkLru(slot);
+      pushLruFront(slot);
+    }
+    return chunks_[slot]->data();
   }
   if (chunk_count_ >= maxChunks()) evictOldest();
   std::uint32_t slot;
@@ -180,10 +205,11 @@ float* ChunkedVoxelMap::chunkFor(std::uint64_t key) {
     chunks_.push_back(std::make_unique<Chunk>());
     chunks_.back()->fill(0.0f);
     slot_key_.push_back(kEmptyKey);
-    slot_written_.push_back(0);
+    lru_prev_.push_back(kNoSlot);
+    lru_next_.push_back(kNoSlot);
   }
   slot_key_[slot] = key;
-  slot_written_[slot] = tick_;
+  pushLruFront(slot);
   ++chunk_count_;
   if (2 * (chunk_count_ + 1) > table_.size()) growTable();
   insertIntoTable(key, slot);
@@ -227,15 +253,14 @@ void ChunkedVoxelMap::growTable() {
 }
 
 void ChunkedVoxelMap::evictOldest() {
-  std::size_t oldest = slot_key_.size();
-  for (std::size_t s = 0; s < slot_key_.size(); ++s) {
-    if (slot_key_[s] == kEmptyKey) continue;
-    if (oldest == slot_key_.size() || slot_written_[s] < slot_written_[oldest]) oldest = s;
-  }
-  if (oldest == slot_key_.size()) return;
+  // O(1): the tail of the recency list (the previous linear scan cost a pass over every chunk
+  // per new chunk once the bound was reached).
+  const std::uint32_t oldest = lru_tail_;
+  if (oldest == kNoSlot) return;
+  unlinkLru(oldest);
   eraseFromTable(slot_key_[oldest]);
   slot_key_[oldest] = kEmptyKey;
-  free_slots_.push_back(static_cast<std::uint32_t>(oldest));
+  free_slots_.push_back(oldest);
   --chunk_count_;
   ++evicted_;
   cached_key_ = kEmptyKey;
@@ -248,6 +273,7 @@ void ChunkedVoxelMap::clear() {
     free_slots_.push_back(static_cast<std::uint32_t>(s));
   }
   std::fill(table_.begin(), table_.end(), kNoSlot);
+  lru_head_ = lru_tail_ = kNoSlot;
   chunk_count_ = 0;
   cached_key_ = kEmptyKey;
 }

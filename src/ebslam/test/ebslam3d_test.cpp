@@ -167,13 +167,28 @@ TEST(ChunkedVoxelMap, MemoryBoundEvictsLeastRecentlyWritten) {
 TEST(Ebslam3dConfig, ValidatesAndPresets) {
   EXPECT_NO_THROW(Ebslam3dConfig::defaults().validate());
   EXPECT_NO_THROW(Ebslam3dConfig::fast().validate());
+  EXPECT_NO_THROW(Ebslam3dConfig::thesis().validate());
+  const Ebslam3dConfig t = Ebslam3dConfig::thesis();
+  EXPECT_EQ(t.num_particles, 100);  // thesis 8.4 default set
+  EXPECT_EQ(t.resample_every, 100);
+  EXPECT_EQ(t.batch_size, 3);
+  EXPECT_EQ(t.event_share, 1.0);
+  EXPECT_EQ(t.voxel_size_m, 0.01);
+  EXPECT_EQ(t.splat_lambda, 1.5);
+  EXPECT_EQ(t.max_event_rate, 0.0);
+  EXPECT_EQ(t.sigma_position_per_sqrt_s, 0.0);
   const Ebslam3dConfig d = Ebslam3dConfig::defaults();
-  EXPECT_EQ(d.num_particles, 100);  // thesis 8.4 default set
-  EXPECT_EQ(d.resample_every, 100);
+  EXPECT_EQ(d.num_particles, 100);
   EXPECT_EQ(d.batch_size, 3);
-  EXPECT_EQ(d.event_share, 1.0);
-  EXPECT_EQ(d.voxel_size_m, 0.01);
-  EXPECT_EQ(d.splat_lambda, 1.5);
+  EXPECT_EQ(d.resample_every, 10);
+  EXPECT_EQ(d.voxel_size_m, 0.02);
+  EXPECT_EQ(d.max_event_rate, 60000.0);
+  EXPECT_EQ(d.sigma_position_m, 0.0);
+  EXPECT_GT(d.sigma_position_per_sqrt_s, 0.0);
+  const Ebslam3dConfig f = Ebslam3dConfig::fast();
+  EXPECT_EQ(f.num_particles, 50);
+  EXPECT_EQ(f.batch_size, 10);
+  EXPECT_EQ(f.max_event_rate, 40000.0);
   const auto bad = [](auto mutate) {
     Ebslam3dConfig c;
     mutate(c);
@@ -186,6 +201,11 @@ TEST(Ebslam3dConfig, ValidatesAndPresets) {
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.voxel_size_m = std::nan(""); })),
                std::invalid_argument);
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.max_range_m = 0.05; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.max_event_rate = -1.0; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.sigma_position_per_sqrt_s = -0.1; })),
+               std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.health.lost_ratio = 0.9; })), std::invalid_argument);
+  EXPECT_STREQ(toString(TrackingState3d::kLost), "lost");
 }
 
 // Pure diffusion: with K beyond the run no resampling happens, so every particle is a random walk
@@ -197,6 +217,9 @@ TEST(EventSlam3d, DiffusionFollowsEquations811To815) {
   c.resample_every = 1000000;
   c.sigma_position_m = 0.002;
   c.sigma_rotation_rad = 0.003;
+  c.sigma_position_per_sqrt_s = 0.0;
+  c.sigma_rotation_per_sqrt_s = 0.0;
+  c.max_event_rate = 0.0;
   EventSlam3d slam(c);
   PointEventVector events(100);
   for (int k = 0; k < 100; ++k) {
@@ -217,6 +240,115 @@ TEST(EventSlam3d, DiffusionFollowsEquations811To815) {
   EXPECT_NEAR(var_x / n, 100 * table_var * 0.002 * 0.002, 0.08 * 100 * 0.002 * 0.002);
   EXPECT_NEAR(var_z / n, 100 * table_var * 0.002 * 0.002, 0.08 * 100 * 0.002 * 0.002);
   EXPECT_NEAR(angle2 / n, 100 * table_var * 0.003 * 0.003, 0.08 * 100 * 0.003 * 0.003);
+}
+
+// Diffusion per time: the spread after one second of events is sigma^2 per axis whether the
+// second holds 100 or 10000 events (with per-event diffusion it would grow 100-fold).
+TEST(EventSlam3d, DiffusionPerTimeDoesNotDependOnTheEventRate) {
+  for (const int count : {100, 10000}) {
+    Ebslam3dConfig c;
+    c.num_particles = 4000;
+    c.batch_size = 1;
+    c.resample_every = 100000000;
+    c.sigma_position_m = 0.0;
+    c.sigma_rotation_rad = 0.0;
+    c.sigma_position_per_sqrt_s = 0.05;
+    c.sigma_rotation_per_sqrt_s = 0.02;
+    c.max_event_rate = 0.0;
+    EventSlam3d slam(c);
+    PointEventVector events(static_cast<std::size_t>(count) + 1);
+    for (int k = 0; k <= count; ++k) {
+      events[k].t_us = static_cast<std::int64_t>(1e6 * k / count);
+      events[k].point = Eigen::Vector3f(0.1f, -0.2f, 1.5f);
+    }
+    slam.process(events);
+    double var_y = 0.0, angle2 = 0.0;
+    for (int i = 0; i < c.num_particles; ++i) {
+      const Pose3 p = slam.particles().particle(i);
+      var_y += p.position.y() * p.position.y();
+      const double a = Eigen::AngleAxisd(p.orientation).angle();
+      angle2 += a * a;
+    }
+    const double n = c.num_particles;
+    EXPECT_NEAR(var_y / n, 0.05 * 0.05, 0.1 * 0.05 * 0.05) << count << " events";
+    EXPECT_NEAR(angle2 / n, 0.02 * 0.02, 0.1 * 0.02 * 0.02) << count << " events";
+  }
+}
+
+// The rate bound keeps about max_event_rate events per second, spread over the whole stream.
+TEST(EventSlam3d, EventRateCapThinsUniformly) {
+  Ebslam3dConfig c;
+  c.max_event_rate = 20000.0;
+  EventSlam3d slam(c);
+  PointEventVector events;
+  // 2 s at 200k events/s, then 1 s at 10k events/s (below the bound: all kept).
+  for (int k = 0; k < 400000; ++k) {
+    events.push_back({static_cast<std::int64_t>(k * 5), Eigen::Vector3f(0.1f, 0.0f, 1.0f)});
+  }
+  const std::size_t fast_count = events.size();
+  for (int k = 0; k < 10000; ++k) {
+    events.push_back(
+        {2000000 + static_cast<std::int64_t>(k * 100), Eigen::Vector3f(0.1f, 0.0f, 1.0f)});
+  }
+  // The first 10 ms window has no rate estimate yet and keeps its 2000 events.
+  const EventSlam3d::ProcessStats first = slam.process(events.data(), fast_count);
+  EXPECT_NEAR(static_cast<double>(first.used), 2000.0 + 0.1 * 398000.0, 0.01 * 40000.0);
+  EXPECT_EQ(first.used + first.skipped, fast_count);
+  const EventSlam3d::ProcessStats second =
+      slam.process(events.data() + fast_count, events.size() - fast_count);
+  EXPECT_GE(second.used, 9900u);  // the first window still carries the high rate's share
+  // Uniform: each tenth of the fast part keeps its tenth of the events.
+  EventSlam3d tenth(c);
+  for (int part = 0; part < 10; ++part) {
+    const EventSlam3d::ProcessStats s = tenth.process(events.data() + part * 40000, 40000);
+    EXPECT_NEAR(static_cast<double>(s.used), part == 0 ? 5800.0 : 4000.0, 100.0) << part;
+  }
+}
+
+// The tracking state: tracking on a consistent scene, lost when the events stop fitting the map
+// (the sensor is elsewhere: a scene shifted by 0.5 m), recovering and then tracking again when
+// they fit again.
+TEST(EventSlam3d, TrackingHealthDetectsLossAndRecovery) {
+  Ebslam3dConfig c;
+  c.sigma_position_per_sqrt_s = 0.0;
+  c.sigma_rotation_per_sqrt_s = 0.0;
+  EventSlam3d slam(c);
+  std::mt19937 rng(7);
+  // 8000 fixed points on a bumpy 2 x 1.5 m wall 1.5 m ahead (a few events per voxel and second,
+  // as on a textured room); the shifted scene is the same wall moved by 0.6 m.
+  std::uniform_int_distribution<int> pick(0, 7999);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Eigen::Vector3f> wall;
+  for (int k = 0; k < 8000; ++k) {
+    const float x = u(rng), y = 0.75f * u(rng);
+    wall.emplace_back(x, y, 1.5f + 0.1f * std::sin(3.0f * x) * std::cos(4.0f * y));
+  }
+  std::int64_t t = 0;
+  const auto feed = [&](double seconds, const Eigen::Vector3f& shift) {
+    PointEventVector events;
+    const auto n = static_cast<int>(seconds * 20000);
+    for (int k = 0; k < n; ++k) {
+      events.push_back({t, wall[static_cast<std::size_t>(pick(rng))] + shift});
+      t += 50;
+    }
+    slam.process(events);
+  };
+  feed(2.0, Eigen::Vector3f::Zero());
+  EXPECT_EQ(slam.health().state, TrackingState3d::kTracking);
+  EXPECT_EQ(slam.health().lost_count, 0u);
+  EXPECT_GT(slam.health().fit_ratio, 0.8);
+  EXPECT_GT(slam.health().ess_share, 0.5);
+  feed(0.3, Eigen::Vector3f(0.5f, 0.3f, 0.2f));
+  EXPECT_EQ(slam.health().state, TrackingState3d::kLost);
+  EXPECT_EQ(slam.health().lost_count, 1u);
+  EXPECT_LT(slam.health().fit_ratio, c.health.recover_ratio);
+  feed(0.2, Eigen::Vector3f::Zero());
+  EXPECT_EQ(slam.health().state, TrackingState3d::kRecovering);
+  feed(0.6, Eigen::Vector3f::Zero());
+  EXPECT_EQ(slam.health().state, TrackingState3d::kTracking);
+  EXPECT_GT(slam.health().time_lost_s, 0.02);
+  slam.reset();
+  EXPECT_EQ(slam.health().lost_count, 0u);
 }
 
 // A smooth synthetic path that starts and ends at rest (the map is empty at the start, as on a
@@ -245,11 +377,18 @@ PointEventVector testEvents(const Trajectory& path) {
                              path.back().t_s);
 }
 
-TEST(EventSlam3d, TracksAKnownPathOnSyntheticDepthEvents) {
+// The thesis preset within 3 cm; the default preset (its diffusion chosen for the D-eDVS
+// simulator's hand-held paths, faster than this one at its 0.3 m in 3 s) within 12 cm (measured
+// 8.6 cm: its larger diffusion costs accuracy on slow paths).
+class TracksAKnownPath : public ::testing::TestWithParam<bool> {};
+
+TEST_P(TracksAKnownPath, OnSyntheticDepthEvents) {
+  const bool thesis = GetParam();
+  const double bound_m = thesis ? 0.03 : 0.12;
   const Trajectory truth = testPath(3.0);
   const PointEventVector events = testEvents(truth);
   ASSERT_GT(events.size(), 5000u);
-  EventSlam3d slam(Ebslam3dConfig::defaults());
+  EventSlam3d slam(thesis ? Ebslam3dConfig::thesis() : Ebslam3dConfig::defaults());
   Trajectory estimate;
   for (std::size_t i = 0; i < events.size(); i += 1000) {
     const std::size_t n = std::min<std::size_t>(1000, events.size() - i);
@@ -270,12 +409,14 @@ TEST(EventSlam3d, TracksAKnownPathOnSyntheticDepthEvents) {
     angle_sq += angle * angle;
   }
   const double n = static_cast<double>(estimate.size());
-  EXPECT_LT(std::sqrt(position_sq / n), 0.03);
-  EXPECT_LT(std::sqrt(angle_sq / n) * 180.0 / M_PI, 2.0);
-  EXPECT_LT((estimate.back().position - truth.back().position).norm(), 0.05);
+  EXPECT_LT(std::sqrt(position_sq / n), bound_m);
+  EXPECT_LT(std::sqrt(angle_sq / n) * 180.0 / M_PI, thesis ? 2.0 : 8.0);
+  EXPECT_LT((estimate.back().position - truth.back().position).norm(), thesis ? 0.05 : 0.2);
   EXPECT_GT(slam.map().chunkCount(), 10u);
   EXPECT_LE(slam.peakMemoryBytes(), 30u << 20);
 }
+INSTANTIATE_TEST_SUITE_P(EventSlam3d, TracksAKnownPath, ::testing::Values(true, false),
+                         [](const auto& info) { return info.param ? "Thesis" : "Default"; });
 
 TEST(EventSlam3d, BadPointsAreSkippedAndCountedWithoutChangingTheResult) {
   const Trajectory truth = testPath(0.5);
@@ -296,8 +437,10 @@ TEST(EventSlam3d, BadPointsAreSkippedAndCountedWithoutChangingTheResult) {
       ++bad;
     }
   }
-  EventSlam3d clean_slam(Ebslam3dConfig::defaults());
-  EventSlam3d dirty_slam(Ebslam3dConfig::defaults());
+  Ebslam3dConfig all = Ebslam3dConfig::defaults();
+  all.max_event_rate = 0.0;  // every valid event is used
+  EventSlam3d clean_slam(all);
+  EventSlam3d dirty_slam(all);
   clean_slam.process(events);
   const EventSlam3d::ProcessStats stats = dirty_slam.process(dirty);
   EXPECT_EQ(stats.rejected, bad);
@@ -358,6 +501,7 @@ TEST(EventSlam3d, DeterministicForASeedAndEventShareThinsEvenly) {
   other.process(events);
   EXPECT_NE(other.estimate().position, a.estimate().position);
   c.event_share = 0.25;
+  c.max_event_rate = 0.0;
   EventSlam3d quarter(c);
   const auto stats = quarter.process(events);
   EXPECT_NEAR(static_cast<double>(stats.used), 0.25 * events.size(), 1.0);
@@ -368,7 +512,8 @@ TEST(EventSlam3d, SetConfigKeepsTheMapAndRestartsParticlesAtTheEstimate) {
   const Trajectory truth = testPath(0.4);
   const PointEventVector events = testEvents(truth);
   const std::size_t half = events.size() / 2;
-  EventSlam3d slam(Ebslam3dConfig::defaults());
+  // The thesis preset: its per-event diffusion follows this path's 1.2 m/s peak.
+  EventSlam3d slam(Ebslam3dConfig::thesis());
   slam.process(events.data(), half);
   const std::size_t chunks = slam.map().chunkCount();
   const Pose3 estimate = slam.estimate();
@@ -389,7 +534,7 @@ TEST(EventSlam3d, SetConfigKeepsTheMapAndRestartsParticlesAtTheEstimate) {
   bad.batch_size = 0;
   EXPECT_THROW(slam.setConfig(bad), std::invalid_argument);
   bad = slam.config();
-  bad.voxel_size_m = 0.02;
+  bad.voxel_size_m = 2.0 * bad.voxel_size_m;
   EXPECT_THROW(slam.setConfig(bad), std::invalid_argument);
   EXPECT_EQ(slam.config().batch_size, 5);
   EXPECT_EQ(slam.particles().size(), 40);

@@ -8,6 +8,11 @@
 //    the depth frame nearest in time; events without a depth are dropped. The path is the depth
 //    camera's (TUM convention); the filter tracks the eDVS, scored against the eDVS's truth.
 //  - synthetic: synthetic_depth_events.h (a textured box room, geometric event model).
+// The path is a TUM ground truth (--groundtruth) or a synthesised hand-held motion (--motion,
+// handheld_motions.h; floor_sweep runs in a room without the table, which would stand above it).
+// --events-cache keeps the fused D-eDVS events of a (path, duration, scene seed) in a file, so
+// that runs differing only in the filter skip the simulation. --diagnostics writes one CSV row per
+// recorded estimate: tracking state, ESS, the fit, events used, the pose error before alignment.
 // e.g. ebslam_experiment_ebslam3d --groundtruth rgbd_dataset_freiburg1_xyz-groundtruth.txt --seed 2
 // Prints one JSON object (stdout). Exit status: 0 success, 1 usage / input error.
 
@@ -22,6 +27,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -30,6 +36,7 @@
 #include "ebslam/dedvs_scene.h"
 #include "ebslam/dedvs_simulator.h"
 #include "ebslam/ebslam3d.h"
+#include "ebslam/handheld_motions.h"
 #include "ebslam/synthetic_depth_events.h"
 #include "ebslam/trajectory.h"
 #include "ebslam/trajectory_evaluation.h"
@@ -53,11 +60,12 @@ using PointSink = std::function<void(const ebslam::PointEvent&)>;
 // D-eDVS source: simulates the rig along `truth` (shifted to start at 0 s) over
 // [0, duration] and streams the fused events to `sink`. Returns the eDVS ground truth.
 ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_s,
-                               std::uint64_t seed, const PointSink& sink, std::size_t* simulated,
-                               std::size_t* without_depth) {
+                               std::uint64_t seed, bool with_table, const PointSink& sink,
+                               std::size_t* simulated, std::size_t* without_depth) {
   using namespace ebslam;
   RoomSceneConfig room;
   room.seed = seed;
+  room.with_table = with_table;
   const Scene scene = makeRoomScene(truth, room);
   DedvsSimulatorConfig config;
   config.seed = seed;
@@ -94,6 +102,69 @@ ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_
   return run.edvs_ground_truth;
 }
 
+// Events cache: a header (magic, counts), the eDVS truth, the fused events; native byte order
+// (a cache is local to a machine).
+constexpr std::uint64_t kCacheMagic = 0x33444d414c534245ULL;  // "EBSLAM3D" + version 1
+
+bool readCache(const std::string& path, ebslam::PointEventVector& events, ebslam::Trajectory& truth,
+               std::size_t& simulated, std::size_t& without_depth) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::uint64_t header[5] = {};
+  in.read(reinterpret_cast<char*>(header), sizeof(header));
+  if (!in || header[0] != kCacheMagic) throw std::runtime_error("not an events cache: " + path);
+  simulated = header[1];
+  without_depth = header[2];
+  truth.resize(header[3]);
+  for (ebslam::StampedPose& p : truth) {
+    double v[8];
+    in.read(reinterpret_cast<char*>(v), sizeof(v));
+    p.t_s = v[0];
+    p.position = Eigen::Vector3d(v[1], v[2], v[3]);
+    p.orientation = Eigen::Quaterniond(v[4], v[5], v[6], v[7]);
+  }
+  events.resize(header[4]);
+  in.read(reinterpret_cast<char*>(events.data()),
+          static_cast<std::streamsize>(events.size() * sizeof(ebslam::PointEvent)));
+  if (!in) throw std::runtime_error("truncated events cache: " + path);
+  return true;
+}
+
+void writeCache(const std::string& path, const ebslam::PointEventVector& events,
+                const ebslam::Trajectory& truth, std::size_t simulated, std::size_t without_depth) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    const std::uint64_t header[5] = {kCacheMagic, simulated, without_depth, truth.size(),
+                                     events.size()};
+    out.write(reinterpret_cast<const char*>(header), sizeof(header));
+    for (const ebslam::StampedPose& p : truth) {
+      const double v[8] = {p.t_s,
+                           p.position.x(),
+                           p.position.y(),
+                           p.position.z(),
+                           p.orientation.w(),
+                           p.orientation.x(),
+                           p.orientation.y(),
+                           p.orientation.z()};
+      out.write(reinterpret_cast<const char*>(v), sizeof(v));
+    }
+    out.write(reinterpret_cast<const char*>(events.data()),
+              static_cast<std::streamsize>(events.size() * sizeof(ebslam::PointEvent)));
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot write " + path);
+}
+
+// Per recorded estimate: the filter's health and the error before alignment (the map frame is
+// the start pose, so truth relative to its start is comparable directly; the error after the
+// evaluation's alignment is in the JSON).
+struct DiagnosticRow {
+  double t_s;
+  ebslam::TrackingHealth health;
+  std::size_t chunk_events, used_total;
+};
+
 // Feeds the events to the filter in chunks of record_step_us of event time and records one
 // estimate per chunk; times the filter (thread CPU).
 class ChunkedRun {
@@ -118,9 +189,14 @@ class ChunkedRun {
     p.t_s = 1e-6 * static_cast<double>(chunk_.back().t_us);
     p.position = slam_.estimate().position;
     p.orientation = slam_.estimate().orientation;
-    if (estimate_.empty() || p.t_s > estimate_.back().t_s) estimate_.push_back(p);
+    if (estimate_.empty() || p.t_s > estimate_.back().t_s) {
+      estimate_.push_back(p);
+      rows_.push_back({p.t_s, slam_.health(), chunk_.size(),
+                       static_cast<std::size_t>(slam_.processedEvents())});
+    }
     chunk_.clear();
   }
+  const std::vector<DiagnosticRow>& rows() const { return rows_; }
 
   const ebslam::EventSlam3d& slam() const { return slam_; }
   const ebslam::Trajectory& estimate() const { return estimate_; }
@@ -133,6 +209,7 @@ class ChunkedRun {
   const std::int64_t record_step_us_;
   ebslam::PointEventVector chunk_;
   ebslam::Trajectory estimate_;
+  std::vector<DiagnosticRow> rows_;
   std::size_t streamed_ = 0;
   std::int64_t first_us_ = 0, last_us_ = 0;
   double cpu_s_ = 0.0;
@@ -145,6 +222,30 @@ void writeMapXyz(const std::string& path, const ebslam::EventSlam3d& slam) {
     const Eigen::Vector3f c = slam.map().voxelCentre(v);
     out << c.x() << ' ' << c.y() << ' ' << c.z() << ' ' << value << '\n';
   });
+  if (!out) throw std::runtime_error("cannot write " + path);
+}
+
+void writeDiagnostics(const std::string& path, const ChunkedRun& run,
+                      const ebslam::Trajectory& truth) {
+  std::ofstream out(path);
+  out << "t_s,state,ess_share,fit_fast,fit_slow,fit_ratio,chunk_events,used_events,"
+         "position_error_m,rotation_error_deg\n";
+  const ebslam::StampedPose start = ebslam::interpolatePose(truth, truth.front().t_s);
+  const Eigen::Quaterniond inv_start = start.orientation.conjugate();
+  const ebslam::Trajectory& estimate = run.estimate();
+  for (std::size_t i = 0; i < run.rows().size(); ++i) {
+    const DiagnosticRow& r = run.rows()[i];
+    const ebslam::StampedPose t = ebslam::interpolatePose(truth, r.t_s);
+    const Eigen::Vector3d rel_position = inv_start * (t.position - start.position);
+    const Eigen::Quaterniond rel_orientation = inv_start * t.orientation;
+    const double position_error = (estimate[i].position - rel_position).norm();
+    const double rotation_error =
+        estimate[i].orientation.angularDistance(rel_orientation) * 180.0 / M_PI;
+    out << r.t_s << ',' << ebslam::toString(r.health.state) << ',' << r.health.ess_share << ','
+        << r.health.fit_fast << ',' << r.health.fit_slow << ',' << r.health.fit_ratio << ','
+        << r.chunk_events << ',' << r.used_total << ',' << position_error << ',' << rotation_error
+        << '\n';
+  }
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
@@ -172,7 +273,9 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"rmse_m\": %.5f, \"max_error_m\": %.5f, \"rotation_rmse_deg\": %.4f, "
       "\"time_offset_s\": %.4f, \"peak_memory_bytes\": %zu, \"peak_rss_bytes\": %zu, "
       "\"map_chunks\": %zu, "
-      "\"evicted_chunks\": %llu}\n",
+      "\"evicted_chunks\": %llu, \"max_event_rate\": %g, \"sigma_position_per_sqrt_s\": %g, "
+      "\"sigma_rotation_per_sqrt_s\": %g, \"lost_count\": %llu, \"time_lost_s\": %.3f, "
+      "\"final_state\": \"%s\"}\n",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -181,7 +284,10 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       static_cast<unsigned long long>(slam.processedEvents()), cpu,
       static_cast<double>(streamed) / cpu, span / cpu, eval.position_rmse_m, eval.position_max_m,
       eval.rotation_rmse_deg, eval.alignment.time_offset_s, slam.peakMemoryBytes(), peakRssBytes(),
-      slam.map().chunkCount(), static_cast<unsigned long long>(slam.map().evictedChunks()));
+      slam.map().chunkCount(), static_cast<unsigned long long>(slam.map().evictedChunks()),
+      config.max_event_rate, config.sigma_position_per_sqrt_s, config.sigma_rotation_per_sqrt_s,
+      static_cast<unsigned long long>(slam.health().lost_count), slam.health().time_lost_s,
+      ebslam::toString(slam.health().state));
 }
 
 }  // namespace
@@ -189,23 +295,33 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
 int main(int argc, char** argv) {
   using namespace ebslam;
   CLI::App app{"EB-SLAM-3D on simulated depth events along a ground-truth path"};
-  std::string groundtruth, source = "dedvs", preset = "default", trajectory_out, map_out, truth_out;
+  std::string groundtruth, motion, source = "dedvs", preset = "default", trajectory_out, map_out,
+                                   truth_out, diagnostics_out, events_cache;
   double duration_s = 0.0, record_every_s = 0.01;
   std::uint64_t scene_seed = 1;
   SyntheticRoomConfig room;
   SyntheticEventConfig sim;
   SyntheticDepthSensor sensor;
   Ebslam3dConfig config;
-  app.add_option("--groundtruth", groundtruth, "TUM ground-truth camera path")
-      ->required()
-      ->check(CLI::ExistingFile);
+  auto* gt_opt = app.add_option("--groundtruth", groundtruth, "TUM ground-truth camera path")
+                     ->check(CLI::ExistingFile);
+  auto* motion_opt =
+      app.add_option("--motion", motion,
+                     "synthesised hand-held path instead: yaw_turn, floor_sweep, shake "
+                     "(handheld_motions.h; 15 s unless --motion-duration)")
+          ->check(CLI::IsMember({"yaw_turn", "floor_sweep", "shake"}))
+          ->excludes(gt_opt);
+  double motion_duration_s = 15.0;
+  app.add_option("--motion-duration", motion_duration_s, "length of the --motion path [s]")
+      ->capture_default_str();
   app.add_option("--source", source,
                  "depth events: dedvs (D-eDVS simulator + depth fusion) or synthetic "
                  "(synthetic_depth_events.h)")
       ->check(CLI::IsMember({"dedvs", "synthetic"}))
       ->capture_default_str();
-  app.add_option("--preset", preset, "default or fast (thesis 8.4 parameter sets)")
-      ->check(CLI::IsMember({"default", "fast"}))
+  app.add_option("--preset", preset,
+                 "default, fast (this project's presets) or thesis (the thesis' 8.4 default set)")
+      ->check(CLI::IsMember({"default", "fast", "thesis"}))
       ->capture_default_str();
   app.add_option("--duration", duration_s, "use only the first this many seconds (0 = all)");
   app.add_option("--seed", config.seed, "filter seed (the scene and events use --scene-seed)");
@@ -218,6 +334,16 @@ int main(int argc, char** argv) {
   auto* sp_opt = app.add_option("--sigma-position", config.sigma_position_m, "[m] per event");
   auto* sr_opt = app.add_option("--sigma-rotation", config.sigma_rotation_rad, "[rad] per event");
   auto* alpha_opt = app.add_option("--alpha", config.score_alpha, "score decay per event");
+  auto* rate_opt =
+      app.add_option("--max-rate", config.max_event_rate, "events used per s at most (0 = all)");
+  auto* spt_opt = app.add_option("--sigma-position-time", config.sigma_position_per_sqrt_s,
+                                 "diffusion [m / sqrt(s) of event time]");
+  auto* srt_opt = app.add_option("--sigma-rotation-time", config.sigma_rotation_per_sqrt_s,
+                                 "diffusion [rad / sqrt(s) of event time]");
+  app.add_option("--diagnostics", diagnostics_out,
+                 "CSV per recorded estimate: tracking state, ESS, fit, error before alignment");
+  app.add_option("--events-cache", events_cache,
+                 "file of the fused D-eDVS events: read if it exists, else written");
   double max_map_mb = -1.0;
   app.add_option("--max-map-mb", max_map_mb, "map memory bound [MiB] (0 = unbounded)");
   bool splat_all = false;
@@ -230,9 +356,15 @@ int main(int argc, char** argv) {
   app.add_option("--aligned-truth", truth_out, "CSV of per-pose errors and aligned positions");
   app.add_option("--map-xyz", map_out, "final map voxels above 1 as 'x y z value' lines");
   CLI11_PARSE(app, argc, argv);
+  if (gt_opt->count() + motion_opt->count() != 1) {
+    std::fprintf(stderr, "error: give --groundtruth or --motion\n");
+    return 1;
+  }
 
   try {
-    Ebslam3dConfig base = preset == "fast" ? Ebslam3dConfig::fast() : Ebslam3dConfig::defaults();
+    Ebslam3dConfig base = preset == "fast"     ? Ebslam3dConfig::fast()
+                          : preset == "thesis" ? Ebslam3dConfig::thesis()
+                                               : Ebslam3dConfig::defaults();
     // Explicit options override the preset.
     const Ebslam3dConfig given = config;
     config = base;
@@ -245,10 +377,21 @@ int main(int argc, char** argv) {
     if (sp_opt->count()) config.sigma_position_m = given.sigma_position_m;
     if (sr_opt->count()) config.sigma_rotation_rad = given.sigma_rotation_rad;
     if (alpha_opt->count()) config.score_alpha = given.score_alpha;
+    if (rate_opt->count()) config.max_event_rate = given.max_event_rate;
+    if (spt_opt->count()) config.sigma_position_per_sqrt_s = given.sigma_position_per_sqrt_s;
+    if (srt_opt->count()) config.sigma_rotation_per_sqrt_s = given.sigma_rotation_per_sqrt_s;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
-    Trajectory truth = readTumTrajectory(groundtruth);
+    Trajectory truth;
+    if (!motion.empty()) {
+      // The path's shape is fixed (seed 1); --scene-seed varies the room, events and noise.
+      truth = makeHandheldMotion(handheldMotionFromString(motion), motion_duration_s, 1);
+      groundtruth = "motion:" + motion;
+    } else {
+      truth = readTumTrajectory(groundtruth);
+    }
     if (truth.size() < 2) throw std::runtime_error("ground truth has fewer than two poses");
+    const bool with_table = motion != "floor_sweep";
 
     RunSummary summary{groundtruth, source, preset, scene_seed};
     const auto record_step_us = static_cast<std::int64_t>(record_every_s * 1e6);
@@ -262,8 +405,20 @@ int main(int argc, char** argv) {
           duration_s > 0.0 ? std::min(truth.back().t_s, duration_s) : truth.back().t_s;
       config.focal_px = DedvsSimulatorConfig{}.edvs.focal_px;
       run = std::make_unique<ChunkedRun>(config, record_step_us);
-      sensor_truth =
-          dedvsEvents(truth, t1, scene_seed, sink, &summary.simulated, &summary.without_depth);
+      PointEventVector cached;
+      if (!events_cache.empty() &&
+          readCache(events_cache, cached, sensor_truth, summary.simulated, summary.without_depth)) {
+        for (const PointEvent& e : cached) sink(e);
+      } else if (!events_cache.empty()) {
+        const PointSink store = [&](const PointEvent& e) { cached.push_back(e); };
+        sensor_truth = dedvsEvents(truth, t1, scene_seed, with_table, store, &summary.simulated,
+                                   &summary.without_depth);
+        writeCache(events_cache, cached, sensor_truth, summary.simulated, summary.without_depth);
+        for (const PointEvent& e : cached) sink(e);
+      } else {
+        sensor_truth = dedvsEvents(truth, t1, scene_seed, with_table, sink, &summary.simulated,
+                                   &summary.without_depth);
+      }
     } else {
       config.focal_px = sensor.focal_px;
       const double t0 = truth.front().t_s;
@@ -289,6 +444,7 @@ int main(int argc, char** argv) {
     if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, run->estimate());
     if (!truth_out.empty()) writeTrajectoryErrorsCsv(truth_out, eval);
     if (!map_out.empty()) writeMapXyz(map_out, run->slam());
+    if (!diagnostics_out.empty()) writeDiagnostics(diagnostics_out, *run, sensor_truth);
     printJson(summary, config, *run, eval);
     return 0;
   } catch (const std::exception& e) {

@@ -41,18 +41,64 @@ enum class MapSplat3d {
   kAllParticles,  ///< once per particle, weighted by its normalised score (eq. 8.9)
 };
 
+/// Whether the filter believes it follows the sensor (EventSlam3d::health()).
+enum class TrackingState3d {
+  kTracking,    ///< the events fit the map about as well as they did recently
+  kLost,        ///< the events' fit collapsed (score ratio below lost_ratio)
+  kRecovering,  ///< the fit came back above recover_ratio but not yet for recover_hold_s
+};
+/// "tracking", "lost" or "recovering".
+const char* toString(TrackingState3d state);
+
+/// Thresholds of the tracking state machine. The fit is the best particle's mean map value per
+/// event; it is smoothed over fast_time_s and compared with its slow average over slow_time_s
+/// (event time), which is frozen while lost (it remembers how well the events fitted before).
+struct TrackingHealthConfig {
+  double fast_time_s = 0.02;    ///< [s of event time]
+  double slow_time_s = 2.0;     ///< [s of event time]
+  double lost_ratio = 0.3;      ///< fast / slow below this: lost
+  double recover_ratio = 0.6;   ///< fast / slow at or above this: recovering, then tracking
+  double recover_hold_s = 0.5;  ///< [s of event time] above recover_ratio before tracking
+  double warmup_s = 0.5;        ///< [s of event time] always tracking while the map is new
+};
+
+/// Health of the filter after the last batch.
+struct TrackingHealth {
+  TrackingState3d state = TrackingState3d::kTracking;
+  /// Effective sample size of the normalised scores over N, (0, 1].
+  double ess_share = 1.0;
+  double fit_fast = 0.0;   ///< smoothed best mean map value per event (see TrackingHealthConfig)
+  double fit_slow = 0.0;   ///< its slow average
+  double fit_ratio = 1.0;  ///< fit_fast / fit_slow (1 while fit_slow is 0)
+  std::uint64_t lost_count = 0;  ///< transitions into kLost since the (re)start
+  double time_lost_s = 0.0;      ///< [s of event time] spent lost since the (re)start
+};
+
 struct Ebslam3dConfig {
   int num_particles = 100;   ///< N (8.4 default set: 100)
   int batch_size = 3;        ///< B in [1, 64] (default set: 3)
-  int resample_every = 100;  ///< K: events between resamplings (default set: 100)
+  int resample_every = 10;   ///< K: events between resamplings (thesis: 100)
   double event_share = 1.0;  ///< share of the accepted events used, (0, 1] (default set: all)
-  /// Per-event diffusion std. devs (eq. 8.11-8.15): position [m], rotation angle [rad]; 1e-3,
-  /// not the default set's 0.008: docs/ebslam_core.md#eb-slam-3d-diffusion
-  double sigma_position_m = 1e-3;
-  double sigma_rotation_rad = 1e-3;
+  /// Upper bound of the rate of events used [events per second of event time] (0 = none): above
+  /// it the accepted events are thinned uniformly (share = bound / rate measured over the
+  /// previous rate_window_s), so that the filter's cost per second of motion is bounded. Why:
+  /// docs/ebslam_core.md#eb-slam-3d-rate-cap
+  double max_event_rate = 60000.0;
+  double rate_window_s = 0.01;  ///< [s of event time] window of the rate estimate
+  /// Per-event diffusion std. devs (eq. 8.11-8.15): position [m], rotation angle [rad]. The
+  /// thesis preset uses these (1e-3); the default preset diffuses per time instead (below).
+  double sigma_position_m = 0.0;
+  double sigma_rotation_rad = 0.0;
+  /// Diffusion per time: random-walk std. devs per square root of a second of event time
+  /// [m / sqrt(s)], [rad / sqrt(s)]. A batch spanning dt gets variance sigma^2 dt (plus the
+  /// per-event part B sigma_event^2), dt capped at max_diffusion_dt_s: the spread the particles
+  /// get depends on how far the sensor can have moved, not on how many events it fired.
+  double sigma_position_per_sqrt_s = 0.1;
+  double sigma_rotation_per_sqrt_s = 0.3;
+  double max_diffusion_dt_s = 0.1;  ///< [s]
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
-  double voxel_size_m = 0.01;  ///< occurrence-map voxel edge [m] (default set: 1 cm)
+  double voxel_size_m = 0.02;  ///< occurrence-map voxel edge [m] (thesis: 1 cm)
   double splat_lambda = 1.5;   ///< lambda of eq. 8.10 (8.3: 1.5)
   double focal_px = 160.0;     ///< f of eq. 8.10: the event sensor's focal length [pixels]
   double min_range_m = 0.1;    ///< events nearer than this are rejected [m]
@@ -61,14 +107,17 @@ struct Ebslam3dConfig {
   /// chunks are evicted beyond it.
   std::size_t max_map_bytes = 24u << 20;
   MapSplat3d splat = MapSplat3d::kExpectedPose;
+  TrackingHealthConfig health;
   std::uint64_t seed = 1;  ///< seeds the diffusion noise and the resampling
 
-  /// The thesis' "default" set (8.4): N = 100, K = 100, B = 3, all events, 1 cm voxels.
+  /// This project's default preset: N 100, B 3, K 10, 2 cm voxels, at most 60k events/s, diffusion
+  /// per time (docs/results/ebslam3d.md: chosen on the tuning half of its runs).
   static Ebslam3dConfig defaults() { return {}; }
-  /// The "fast" set: fewer particles and events for about ten times the speed (8.4; the thesis
-  /// does not list its values; N 25, B 5, a quarter of the events, not tuned:
-  /// docs/results/ebslam3d.md reports it beside the default set).
+  /// The fast preset: N 50, B 10, at most 40k events/s, otherwise as defaults().
   static Ebslam3dConfig fast();
+  /// The thesis' "default" set (8.4): N 100, K 100, B 3, all events, 1 cm voxels, per-event
+  /// diffusion 1e-3 m and 1e-3 rad, no rate bound.
+  static Ebslam3dConfig thesis();
 
   /// Throws std::invalid_argument naming the offending parameter.
   void validate() const;
@@ -91,9 +140,12 @@ class ParticleSet3D {
   Eigen::Matrix<double, 6, 6> covariance(const Pose3& mean) const;
 
   /// One batch: diffuse every particle (sigmas already scaled for the batch), score the batch's
-  /// points through its pose against `map` and update its score with `decay`.
-  void step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
-            float sigma_position, float sigma_rotation, const BatchDecay& decay);
+  /// points through its pose against `map` and update its score with `decay`. Returns the
+  /// largest summed map value of the batch over the particles.
+  float step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
+             float sigma_position, float sigma_rotation, const BatchDecay& decay);
+  /// Effective sample size of the normalised scores over N, (0, 1] (1 if the total is zero).
+  double essShare() const;
   /// Systematic resampling (children keep their parent's score, as in EB-SLAM-2D). Returns
   /// false (and does nothing) when the total score is zero or not finite.
   bool resampleSystematic();
@@ -115,7 +167,7 @@ class EventSlam3d {
   struct ProcessStats {
     std::size_t used = 0;      ///< events scored and mapped
     std::size_t rejected = 0;  ///< non-finite or out-of-range points (skipped)
-    std::size_t skipped = 0;   ///< accepted but left out by event_share
+    std::size_t skipped = 0;   ///< accepted but left out by event_share or max_event_rate
   };
   /// Processes events in order, in batches of B (a trailing partial batch is processed as a
   /// smaller batch with its own decay). Throws std::invalid_argument, processing nothing, if a
@@ -143,6 +195,8 @@ class EventSlam3d {
   const ParticleSet3D& particles() const { return particles_; }
   const ChunkedVoxelMap& map() const { return map_; }
   const Ebslam3dConfig& config() const { return config_; }
+  /// Tracking state and its evidence after the last batch.
+  const TrackingHealth& health() const { return health_; }
   std::uint64_t processedEvents() const { return processed_; }
   std::uint64_t rejectedEvents() const { return rejected_; }
   /// Time of the last event seen [us] (INT64_MIN before the first).
@@ -153,6 +207,7 @@ class EventSlam3d {
 
  private:
   void runBatch(int b);
+  void updateHealth(float best_sum, int b, double dt_s);
   void splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q, const Eigen::Vector3f& t,
              float weight);
 
@@ -162,8 +217,20 @@ class EventSlam3d {
   std::vector<BatchDecay> batch_decay_;  // index b - 1
   Pose3 expected_;
   Eigen::Vector3f batch_[64];
+  std::int64_t batch_end_us_ = 0;       // time of the batch's last event [us]
+  std::int64_t prev_batch_end_us_ = 0;  // of the previous batch (0 before the first)
+  bool have_prev_batch_ = false;
   int in_batch_ = 0;
   double share_accumulator_ = 0.0;
+  // Rate cap: events accepted in the current window, its start, the share applied in it.
+  std::int64_t rate_window_start_us_ = 0;
+  std::uint64_t rate_window_count_ = 0;
+  double rate_share_ = 1.0;
+  bool rate_window_open_ = false;
+  TrackingHealth health_;
+  bool health_started_ = false;
+  std::int64_t health_start_us_ = 0;
+  double above_recover_s_ = 0.0;
   std::uint64_t processed_ = 0;
   std::uint64_t rejected_ = 0;
   int since_resample_ = 0;

@@ -162,6 +162,8 @@ class ChunkedVoxelMap {
   void eraseFromTable(std::uint64_t key);
   void growTable();
   void evictOldest();
+  void unlinkLru(std::uint32_t slot);
+  void pushLruFront(std::uint32_t slot);
   std::size_t maxChunks() const;
 
   VoxelMapConfig config_;
@@ -169,13 +171,15 @@ class ChunkedVoxelMap {
   float inv_voxel_ = 100.0f;
   std::vector<std::unique_ptr<Chunk>> chunks_;  // by slot; reused after eviction or clear()
   std::vector<std::uint64_t> slot_key_;         // key of each slot, kEmptyKey when free
-  std::vector<std::uint64_t> slot_written_;     // write tick of each slot (LRU eviction)
+  // Recency list of the occupied slots (doubly linked through slot indices, kNoSlot ends it):
+  // head = most recently written, tail = the next to evict.
+  std::vector<std::uint32_t> lru_prev_, lru_next_;
+  std::uint32_t lru_head_ = kNoSlot, lru_tail_ = kNoSlot;
   std::vector<std::uint32_t> free_slots_;
   std::vector<std::uint32_t> table_;  // open addressing, linear probing, power-of-two size
   std::size_t table_mask_ = 0;
   std::size_t chunk_count_ = 0;
   std::size_t peak_memory_ = 0;
-  std::uint64_t tick_ = 0;
   std::uint64_t evicted_ = 0;
   mutable std::uint64_t cached_key_ = kEmptyKey;
   mutable const float* cached_chunk_ = nullptr;
