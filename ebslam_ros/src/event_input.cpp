@@ -1,10 +1,39 @@
 #include "ebslam_ros/event_input.h"
 
 #include <cmath>
+#include <limits>
 
 #include "ebslam_msgs/event_conversions.h"
 
 namespace ebslam_ros {
+namespace {
+
+constexpr std::int64_t kNoTime = std::numeric_limits<std::int64_t>::min();
+
+// The stream-time rule both guards apply to an event stamped `t_us` [us]: a step back of at most
+// `max_backward_us` is clamped (sensor and transport jitter), a larger one starts a new segment
+// (a restart); the first event's gap after the previous message is reported. Returns the event's
+// time in the stream.
+template <typename Result>
+std::int64_t placeInStream(std::int64_t t_us, std::int64_t max_backward_us,
+                           std::int64_t gap_warning_us, bool first, std::int64_t last_t_us,
+                           Result& result) {
+  if (last_t_us == kNoTime) return t_us;
+  if (t_us < last_t_us) {
+    if (last_t_us - t_us <= max_backward_us) {
+      ++result.clamped;
+      return last_t_us;
+    }
+    if (!result.segments.back().events.empty()) result.segments.emplace_back();
+    result.segments.back().restart = true;
+    result.segments.back().jump_back_us = last_t_us - t_us;
+  } else if (first && t_us - last_t_us > gap_warning_us) {
+    result.gap_us = t_us - last_t_us;
+  }
+  return t_us;
+}
+
+}  // namespace
 
 EventInputResult EventInputGuard::take(const ebslam_msgs::EventArray& msg) {
   EventInputResult result;
@@ -26,23 +55,9 @@ EventInputResult EventInputGuard::take(const ebslam_msgs::EventArray& msg) {
       ++result.zero_time;
       continue;
     }
-    if (last_t_us_ != kNoTime) {
-      if (t_us < last_t_us_) {
-        if (last_t_us_ - t_us <= max_backward_us_) {
-          t_us = last_t_us_;
-          ++result.clamped;
-        } else {
-          if (!result.segments.back().events.empty()) result.segments.emplace_back();
-          result.segments.back().restart = true;
-          result.segments.back().jump_back_us = last_t_us_ - t_us;
-        }
-      } else if (first && t_us - last_t_us_ > gap_warning_us_) {
-        result.gap_us = t_us - last_t_us_;
-      }
-    }
+    last_t_us_ = placeInStream(t_us, max_backward_us_, gap_warning_us_, first, last_t_us_, result);
     first = false;
-    last_t_us_ = t_us;
-    result.segments.back().events.push_back({t_us, e.x, e.y, static_cast<bool>(e.polarity)});
+    result.segments.back().events.push_back({last_t_us_, e.x, e.y, static_cast<bool>(e.polarity)});
   }
   if (result.segments.back().events.empty()) result.segments.pop_back();
   return result;
@@ -66,24 +81,10 @@ DepthEventInputResult DepthEventInputGuard::take(const ebslam_msgs::DepthEventAr
       ++result.zero_time;
       continue;
     }
-    if (last_t_us_ != kNoTime) {
-      if (t_us < last_t_us_) {
-        if (last_t_us_ - t_us <= max_backward_us) {
-          t_us = last_t_us_;  // sensor and transport jitter
-          ++result.clamped;
-        } else {
-          if (!result.segments.back().events.empty()) result.segments.emplace_back();
-          result.segments.back().restart = true;
-          result.segments.back().jump_back_us = last_t_us_ - t_us;
-        }
-      } else if (first && t_us - last_t_us_ > gap_warning_us) {
-        result.gap_us = t_us - last_t_us_;
-      }
-    }
+    last_t_us_ = placeInStream(t_us, max_backward_us, gap_warning_us, first, last_t_us_, result);
     first = false;
-    last_t_us_ = t_us;
     result.segments.back().events.push_back(
-        {t_us, Eigen::Vector3f(e.point.x, e.point.y, e.point.z)});
+        {last_t_us_, Eigen::Vector3f(e.point.x, e.point.y, e.point.z)});
   }
   if (result.segments.back().events.empty()) result.segments.pop_back();
   return result;

@@ -24,16 +24,30 @@ const std::uint8_t* pixel(const sensor_msgs::Image& image, int x, int y) {
   return &image.data[static_cast<std::size_t>(y) * image.step + 3 * x];
 }
 
-TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
+// The renderer's event input and image output, connected.
+struct RendererIo {
   ros::NodeHandle nh;
   ros::Publisher events = nh.advertise<ebslam_msgs::EventArray>("events", 10);
-  ros::Publisher background = nh.advertise<sensor_msgs::Image>("image", 1, true);
   std::vector<sensor_msgs::Image> images;
   ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>(
-      "event_image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
-  ASSERT_TRUE(ebslam_ros_test::spinUntil(
-      [&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
-  ros::WallDuration(0.3).sleep();
+      "event_image", 10, [this](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
+
+  bool connect() {
+    if (!ebslam_ros_test::spinUntil(
+            [&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0)) {
+      return false;
+    }
+    ros::WallDuration(0.3).sleep();  // the renderer's side of the connection
+    return true;
+  }
+};
+
+TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
+  RendererIo io;
+  ASSERT_TRUE(io.connect());
+  ros::Publisher& events = io.events;
+  std::vector<sensor_msgs::Image>& images = io.images;
+  ros::Publisher background = io.nh.advertise<sensor_msgs::Image>("image", 1, true);
   ebslam_msgs::EventArray msg;
   msg.header.frame_id = "edvs_optical_frame";
   msg.width = 128;
@@ -81,14 +95,10 @@ TEST(EventRenderer, DrawsTheWindowsEventsInTheirColours) {
 // Events stamped within the window of time 0 (sim time before the first /clock): the window's
 // start would be negative, which ros::Time cannot hold; the image is still drawn.
 TEST(EventRenderer, EventsNearTimeZeroAreDrawn) {
-  ros::NodeHandle nh;
-  ros::Publisher events = nh.advertise<ebslam_msgs::EventArray>("events", 10);
-  std::vector<sensor_msgs::Image> images;
-  ros::Subscriber sub = nh.subscribe<sensor_msgs::Image>(
-      "event_image", 10, [&](const sensor_msgs::Image::ConstPtr& m) { images.push_back(*m); });
-  ASSERT_TRUE(ebslam_ros_test::spinUntil(
-      [&] { return events.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 10.0));
-  ros::WallDuration(0.3).sleep();
+  RendererIo io;
+  ASSERT_TRUE(io.connect());
+  ros::Publisher& events = io.events;
+  std::vector<sensor_msgs::Image>& images = io.images;
   ebslam_msgs::EventArray msg;
   msg.header.frame_id = "edvs_optical_frame";
   msg.width = 128;
