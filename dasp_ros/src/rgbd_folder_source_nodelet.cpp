@@ -99,7 +99,7 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     std_msgs::Header header;
     header.stamp = ros::Time::now();
     header.frame_id = config_.frame_id;
-    header.seq = static_cast<uint32_t>(published_++);
+    ++published_;
     const sensor_msgs::CameraInfo info =
         toCameraInfo(frame.intrinsics, frame.color.cols, frame.color.rows, header);
     color_info_pub_.publish(info);

@@ -30,11 +30,12 @@ TEST(FolderPipeline, LabelsEqualTheCoreLibraryFrameByFrame) {
   const std::vector<dasp::RgbdFramePaths> paths = dasp::listRgbdFolder(folder);
   ASSERT_GE(static_cast<int>(paths.size()), frames);
 
-  // Frames are identified by header.stamp, never header.seq (roscpp renumbers seq per publisher
-  // across processes, and image_transport publishes nothing while nobody subscribes, so seq says
-  // nothing about the folder position). The source stamps the colour image and both label images
-  // of one frame alike; the colour image's content names the folder frame. Frames whose colour
-  // image this node missed (its subscription connected later) are left out: the source loops.
+  // Frames are identified by their stamp, never by the header's sequence number (roscpp renumbers
+  // it per publisher across processes, and image_transport publishes nothing while nobody
+  // subscribes, so it says nothing about the folder position). The source stamps the colour image
+  // and both label images of one frame alike; the colour image's content names the folder frame.
+  // Frames whose colour image this node missed (its subscription connected later) are left out: the
+  // source loops.
   const std::size_t n = paths.size();
   std::vector<cv::Mat> colours;
   for (const dasp::RgbdFramePaths& p : paths) colours.push_back(dasp::loadRgbdFrame(p).color);

@@ -55,8 +55,9 @@ TEST(RgbdFolderSource, PublishesTheFolderWithFrameAndStamp) {
   for (const auto& d : received.depth) depth_by_stamp[d.header.stamp] = &d;
   const auto frames = dasp::listRgbdFolder(SAMPLE_SESSION_DIR);
   ASSERT_FALSE(frames.empty());
-  // A message's frame is found by its content (never by header.seq, which roscpp renumbers per
-  // publisher): the folder's colour images must differ from each other for that.
+  // A message's frame is found by its content (never by the header's sequence number, which
+  // roscpp renumbers per publisher): the folder's colour images must differ from each other for
+  // that.
   std::vector<dasp::RgbdFrame> expected;
   for (const auto& paths : frames) expected.push_back(dasp::loadRgbdFrame(paths));
   for (std::size_t i = 0; i < expected.size(); ++i) {

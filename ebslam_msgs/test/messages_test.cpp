@@ -30,7 +30,6 @@ M roundTrip(const M& in) {
 
 std_msgs::Header makeHeader(const char* frame) {
   std_msgs::Header header;
-  header.seq = 7;
   header.stamp = ros::Time(1234, 567890000);
   header.frame_id = frame;
   return header;

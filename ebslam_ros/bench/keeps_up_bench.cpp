@@ -1,4 +1,4 @@
-// Keeps-up measurement of an event filter node (issue bar "Keeps up"; run by
+// Keeps-up measurement of an event filter node (does it keep up with a live event rate; run by
 // ebslam_ros/scripts/keeps_up.sh, not a test): publishes `events` at a fixed event rate in
 // fixed-rate messages for a while, the events (pixels, polarities, order) taken from an event
 // file and re-timed to the rate on the wall clock, and measures

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# "Same results through ROS" bar: the simulator nodelet -> EventSlam2d / EventParticleFilter in one
+# "Same results through ROS" check: the simulator nodelet -> EventSlam2d / EventParticleFilter in one
 # manager on /clock at SPEED x real time, recorded, converted with bag_to_tum and scored with
 # ebslam_evaluate_trajectory, beside the offline ebslam_run_ebslam2d / ebslam_run_ebpf on the same
 # events (ebslam_simulate_events with the same trajectory, scene and seed): once recording a pose

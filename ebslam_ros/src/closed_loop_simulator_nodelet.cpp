@@ -122,7 +122,6 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
         static_cast<std::uint32_t>(config_.simulator.events.camera.width),
         static_cast<std::uint32_t>(config_.simulator.events.camera.height)};
     ebslam::EventVector events;
-    std::uint32_t sequence = 0;
     try {
       while (!stop_) {
         ebslam::VelocityCommand command;
@@ -150,7 +149,6 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
         for (ebslam::Event& e : events) e.t_us = clock.stamp(e.t_us).value_or(0);
         ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(events, sensor, config_.frame_id);
         if (events.empty()) msg.header.stamp = stamp;
-        msg.header.seq = sequence++;
         events_pub_.publish(msg);
         ebslam_msgs::Bump reading;
         reading.header.stamp = stamp;

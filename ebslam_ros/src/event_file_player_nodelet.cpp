@@ -111,7 +111,6 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
     if (!msg.events.empty()) {
       msg.header.frame_id = config_.frame_id;
       msg.header.stamp = msg.events.back().ts;
-      msg.header.seq = sequence_++;
       msg.width = reader_->sensor().width;
       msg.height = reader_->sensor().height;
       publisher_.publish(msg);
@@ -219,7 +218,6 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
   std::int64_t last_stamp_us_ = 0;         // its stamp [us since the ROS epoch]
   std::size_t dropped_ = 0;                // events with damaged times
   std::size_t gaps_skipped_ = 0;
-  std::uint32_t sequence_ = 0;
   ros::WallTime subscriber_seen_;
   ros::Publisher publisher_;
   ros::WallTimer timer_;

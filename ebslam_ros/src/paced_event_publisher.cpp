@@ -73,7 +73,7 @@ void PacedEventPublisher::sendNext() {
   if (!pending_.empty()) {
     for (ebslam::Event& e : pending_) e.t_us = clock_.stamp(e.t_us).value_or(-1);
     ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(pending_, options_.sensor, options_.frame_id);
-    msg.header.seq = sequence_++;
+    ++messages_;
     events_pub_.publish(msg);
     pending_.clear();
   }

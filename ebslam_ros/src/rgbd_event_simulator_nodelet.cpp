@@ -164,7 +164,7 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
 
   void publishFrame(const ebslam::DepthFrame& frame) {
     std_msgs::Header header;
-    header.seq = frames_++;
+    ++frames_;
     header.frame_id = config_.depth_frame;
     // The depth camera's own clock (exposure + offset), mapped as the event clock.
     header.stamp = events_->rosTime(std::llround(frame.stamp_s * 1e6));

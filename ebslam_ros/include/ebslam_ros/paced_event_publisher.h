@@ -69,7 +69,7 @@ class PacedEventPublisher {
 
   /// ROS time of stream time `t_us`.
   ros::Time rosTime(std::int64_t t_us) const;
-  std::uint32_t messages() const { return sequence_; }
+  std::uint32_t messages() const { return messages_; }
 
  private:
   std::int64_t periodUs() const;
@@ -82,7 +82,7 @@ class PacedEventPublisher {
   ros::WallTime wall_start_;
   std::int64_t begin_us_ = 0, next_boundary_us_ = 0, last_end_us_ = 0;
   ebslam::EventVector pending_;
-  std::uint32_t sequence_ = 0;
+  std::uint32_t messages_ = 0;
 };
 
 }  // namespace ebslam_ros

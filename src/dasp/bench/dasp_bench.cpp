@@ -230,7 +230,7 @@ BENCHMARK(BM_DaspPixels)
     ->DenseRange(2, 8, 2)
     ->Unit(benchmark::kMillisecond);
 
-// Runtime against K at 640x480 (the bar: flat).
+// Runtime against K at 640x480 (expected: flat).
 void BM_DaspCount(benchmark::State& state) {
   DaspConfig c = config(1);
   c.superpixel_count = static_cast<int>(state.range(0));
@@ -393,7 +393,7 @@ int main(int argc, char** argv) {
   if (dasp1 > 0 && slic1 > 0) {
     std::printf(
         "ratio DASP / OpenCV SLIC, single-threaded, separate benchmarks (wall time, sensitive to "
-        "other jobs): %.3f (%.2f ms / %.2f ms; bar <= 0.125)\n",
+        "other jobs): %.3f (%.2f ms / %.2f ms)\n",
         dasp1 / slic1, dasp1, slic1);
   }
   // The run name carries the benchmark's options ("BM_DaspVsOpenCvSlic/min_time:...").
@@ -409,7 +409,7 @@ int main(int argc, char** argv) {
   if (counter(".ratio") > 0) {
     std::printf(
         "ratio DASP / OpenCV SLIC, single-threaded, alternating frames, CPU time: %.3f (%.2f ms / "
-        "%.2f ms; bar <= 0.125)\n",
+        "%.2f ms)\n",
         counter(".ratio"), counter(".dasp_cpu_ms"), counter(".slic_cpu_ms"));
   }
   const double stream1 = find("BM_DaspStream/threads:1");
@@ -417,7 +417,7 @@ int main(int argc, char** argv) {
   if (stream1 > 0 && slic1 > 0) {
     std::printf(
         "ratio DASP stream (buffers kept across frames) / OpenCV SLIC, single-threaded, separate "
-        "benchmarks: %.3f (%.2f ms / %.2f ms; bar <= 0.125)\n",
+        "benchmarks: %.3f (%.2f ms / %.2f ms)\n",
         stream1 / slic1, stream1, slic1);
   }
   if (stream0 > 0 && slic0 > 0) {

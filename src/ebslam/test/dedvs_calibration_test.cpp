@@ -36,7 +36,7 @@ void expectRecovered(const LedCalibrationRun& run) {
   const ExtrinsicError error =
       extrinsicError(result.sensors.depth_from_edvs, run.truth.depth_from_edvs);
   EXPECT_LT(error.translation_mm, 1.0);
-  // The bar is 0.1 deg; with the 90 plate poses a test can afford, rotation and the
+  // The target is 0.1 deg; with the 90 plate poses a test can afford, rotation and the
   // eDVS principal point are not separated that well (docs/results/dedvs.md, "Calibration").
   EXPECT_LT(error.rotation_deg, 0.2);
   EXPECT_LE(result.rmse_px, 0.5);

@@ -233,40 +233,33 @@ TEST(ClockStall, ParserReplayOfStallsQuietGapsAndPauses) {
       const EventVector events = edvs::generateEvents(static_cast<std::uint32_t>(gap_ms), 1e4, n);
       const std::int64_t at = events[2000].t_us;
       edvs::ParserStats s;
+      // Every replay must give the sent stream back exactly.
+      const auto expectExact = [&](const char* what, const EventVector& sent,
+                                   const EventVector& got) {
+        const edvs::StreamComparison c =
+            edvs::compareStreams(sent, got, true, edvs::wrapPeriodUs(f));
+        std::printf(
+            "replay %s %s %d ms: lost %zu invented %zu backwards %zu final error %lld us "
+            "(dropped bytes %llu, wraps from host time %llu)\n",
+            what, edvs::toString(f), gap_ms, c.lost, c.invented, c.backwards,
+            static_cast<long long>(c.final_error_us),
+            static_cast<unsigned long long>(s.bytes_dropped),
+            static_cast<unsigned long long>(s.wraps_from_host_time));
+        EXPECT_EQ(c.lost + c.invented + c.backwards, 0u) << what;
+        EXPECT_EQ(c.final_error_us, 0) << what;
+      };
       // Stalled line.
-      EventVector got = replay(events, lineArrival(events, f, at, gap), f, 5, &s);
-      edvs::StreamComparison c = edvs::compareStreams(events, got, true, edvs::wrapPeriodUs(f));
-      std::printf(
-          "replay stall %s %d ms: lost %zu invented %zu backwards %zu final error %lld us "
-          "(dropped bytes %llu, wraps from host time %llu)\n",
-          edvs::toString(f), gap_ms, c.lost, c.invented, c.backwards,
-          static_cast<long long>(c.final_error_us),
-          static_cast<unsigned long long>(s.bytes_dropped),
-          static_cast<unsigned long long>(s.wraps_from_host_time));
-      EXPECT_EQ(c.lost + c.invented + c.backwards, 0u);
-      EXPECT_EQ(c.final_error_us, 0);
+      expectExact("stall", events, replay(events, lineArrival(events, f, at, gap), f, 5, &s));
       // Quiet device: the second part shifted by the gap.
       EventVector quiet = events;
       for (std::size_t i = 2000; i < quiet.size(); ++i) quiet[i].t_us += gap;
-      got = replay(quiet, lineArrival(quiet, f, 0, 0), f, 6, &s);
-      c = edvs::compareStreams(quiet, got, true, edvs::wrapPeriodUs(f));
-      std::printf(
-          "replay quiet %s %d ms: lost %zu invented %zu backwards %zu final error %lld us\n",
-          edvs::toString(f), gap_ms, c.lost, c.invented, c.backwards,
-          static_cast<long long>(c.final_error_us));
-      EXPECT_EQ(c.lost + c.invented + c.backwards, 0u);
-      EXPECT_EQ(c.final_error_us, 0);
+      expectExact("quiet", quiet, replay(quiet, lineArrival(quiet, f, 0, 0), f, 6, &s));
       // Reader paused for gap_ms right after a 20 ms quiet stretch.
       EventVector pause = events;
       for (std::size_t i = 2000; i < pause.size(); ++i) pause[i].t_us += 20000;
-      got = replay(pause, lineArrival(pause, f, 0, 0), f, 7, &s, pause[1999].t_us + 8000, gap);
-      c = edvs::compareStreams(pause, got, true, edvs::wrapPeriodUs(f));
-      std::printf(
-          "replay pause %s %d ms: lost %zu invented %zu backwards %zu final error %lld us\n",
-          edvs::toString(f), gap_ms, c.lost, c.invented, c.backwards,
-          static_cast<long long>(c.final_error_us));
-      EXPECT_EQ(c.lost + c.invented + c.backwards, 0u);
-      EXPECT_EQ(c.final_error_us, 0);
+      expectExact(
+          "pause", pause,
+          replay(pause, lineArrival(pause, f, 0, 0), f, 7, &s, pause[1999].t_us + 8000, gap));
     }
   }
 }

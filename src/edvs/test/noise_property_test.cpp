@@ -311,7 +311,7 @@ TEST(NoisyLine, GarbageBytesAnywhereMeasured) {
   // Single garbage bytes inserted anywhere (also inside events) at 1 % and 5 % of the bytes;
   // streams: synthetic 150 k and 5 k events/s, and the real streams at 50 k and 5 k events/s.
   // Printed for E2, E3, E4: lost events against the share of events a garbage byte landed
-  // inside, invented events, final time error. Target of issue 43: lost <= 1.5 x that share,
+  // inside, invented events, final time error. Targets: lost <= 1.5 x that share,
   // invented <= 0.1 % at 1 % and <= 0.5 % at 5 %, final error < 1 ms. Met at 1 % for invented
   // (0.04-0.10 %, once 0.104 %) and for lost on dense streams (1.13-1.31 x); sparse streams lose
   // up to 1.8 x (readings of a garbage-hit event that differ only in the pixel are dropped

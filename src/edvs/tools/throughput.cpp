@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
       const bool ok = (!times || std::abs(c.final_error_us) <= 1000) && c.backwards == 0 &&
                       c.lostShare() < (garbage > 0.02 ? 0.05 : 0.01) &&
                       (!times || c.inventedShare() <= invented_limit);
-      std::printf("%s\n", ok ? "bars met" : "bars NOT met");
+      std::printf("%s\n", ok ? "result: within limits" : "result: OUTSIDE limits");
       return ok ? 0 : 1;
     }
     std::size_t mismatched = 0;
