@@ -77,6 +77,10 @@ BENCHMARK(BM_Ebslam3dDefault)->Unit(benchmark::kMillisecond)->MeasureProcessCPUT
 void BM_Ebslam3dFast(benchmark::State& state) { run(state, Ebslam3dConfig::fast(), 20.0); }
 BENCHMARK(BM_Ebslam3dFast)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
+// The thesis' 8.4 set on the same stream, side by side with the presets (table 8.1: 1.4-2.5x).
+void BM_Ebslam3dThesis(benchmark::State& state) { run(state, Ebslam3dConfig::thesis(), 2.0); }
+BENCHMARK(BM_Ebslam3dThesis)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
 // The thesis' sweep of the particle count (fig. 8.12, top), other parameters at the default set.
 void BM_Ebslam3dParticles(benchmark::State& state) {
   Ebslam3dConfig c = Ebslam3dConfig::defaults();
