@@ -25,7 +25,7 @@ Ebslam3dConfig Ebslam3dConfig::fast() {
   Ebslam3dConfig c;
   c.num_particles = 50;
   c.batch_size = 10;
-  c.max_event_rate = 40000.0;
+  c.max_event_rate = 35000.0;
   return c;
 }
 

@@ -188,7 +188,7 @@ TEST(Ebslam3dConfig, ValidatesAndPresets) {
   const Ebslam3dConfig f = Ebslam3dConfig::fast();
   EXPECT_EQ(f.num_particles, 50);
   EXPECT_EQ(f.batch_size, 10);
-  EXPECT_EQ(f.max_event_rate, 40000.0);
+  EXPECT_EQ(f.max_event_rate, 35000.0);
   const auto bad = [](auto mutate) {
     Ebslam3dConfig c;
     mutate(c);

@@ -126,7 +126,8 @@ struct Ebslam3dConfig {
   /// per time scaled by the speed within [0.1, 1] (docs/results/ebslam3d.md: chosen on the tuning
   /// half of its runs).
   static Ebslam3dConfig defaults() { return {}; }
-  /// The fast preset: N 50, B 10, at most 40k events/s, otherwise as defaults().
+  /// The fast preset: N 50, B 10, at most 35k events/s (the bound chosen on the tuning half,
+  /// docs/results/ebslam3d.md), otherwise as defaults().
   static Ebslam3dConfig fast();
   /// The thesis' "default" set (8.4): N 100, K 100, B 3, all events, 1 cm voxels, per-event
   /// diffusion 1e-3 m and 1e-3 rad, no rate bound, no speed scaling.
