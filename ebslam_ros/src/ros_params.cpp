@@ -560,6 +560,10 @@ DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle&
   requireFrame(nh, "depth_frame", c.depth_frame);
   if (c.edvs_frame == c.depth_frame) fail(nh, "edvs_frame", "must differ from ~depth_frame");
   c.publish_tf = param<bool>(nh, "publish_tf", c.publish_tf);
+  c.tf_parent = param<std::string>(nh, "tf_parent", c.tf_parent);
+  if (c.tf_parent != "depth" && c.tf_parent != "edvs") {
+    fail(nh, "tf_parent", "must be 'depth' or 'edvs'");
+  }
   c.max_wait_s = param<double>(nh, "max_wait", c.max_wait_s);
   if (!std::isfinite(c.max_wait_s) || c.max_wait_s < 0.0 || c.max_wait_s > 10.0) {
     fail(nh, "max_wait", "must be a number of seconds in [0, 10]");

@@ -223,7 +223,10 @@ struct DepthEventFusionNodeConfig {
                                      ///< `camera_info` (kappas stay the calibration's)
   std::string edvs_frame = "edvs_optical_frame";           ///< ~edvs_frame
   std::string depth_frame = "camera_depth_optical_frame";  ///< ~depth_frame
-  bool publish_tf = true;  ///< ~publish_tf: static tf ~depth_frame -> ~edvs_frame
+  bool publish_tf = true;  ///< ~publish_tf: static tf of the calibration's depth_from_edvs
+  /// ~tf_parent: "depth" (~depth_frame -> ~edvs_frame) or "edvs" (~edvs_frame -> ~depth_frame,
+  /// when the eDVS frame has a parent already, e.g. EventSlam3d's base_link)
+  std::string tf_parent = "depth";
   /// ~max_wait: longest wall time an EventArray newer than the latest depth frame waits for the
   /// next (nearer) frame [s]
   double max_wait_s = 0.2;
