@@ -114,11 +114,11 @@ if DISPLAY="${display:-}" LIBGL_ALWAYS_SOFTWARE=1 roslaunch -p "${port}" "${repo
   output_dir:="${d3}" rviz:="${rviz_arg}" </dev/null >"${out}/logs/playback3d_roslaunch.log" 2>&1; then
   [ -z "${capture_pid}" ] || kill "${capture_pid}" 2>/dev/null || true
   rm -f "${d3}/rviz_capture.png"
-  if dedvs_session_eval --session "${session3d}" --calibration "${calibration3d}" --poses "${d3}/demo3d.bag" \
+  if rosrun ebslam_ros dedvs_session_eval --session "${session3d}" --calibration "${calibration3d}" --poses "${d3}/demo3d.bag" \
     --estimate "${d3}/trajectory.tum" >"${d3}/rmse.txt" 2>&1; then
     note "  D-eDVS session test/data/dedvs_session/dedvs_session.bag through ROS in $((SECONDS - start3d)) s (outputs in demo_output/dedvs):"
-    note "    EB-SLAM-3D through ROS against the ground truth: $(grep -E '^published' "${d3}/rmse.txt")"
-    note "    the offline core on the same events: $(grep -E '^offline' "${d3}/rmse.txt")"
+    note "    EB-SLAM-3D through ROS against the ground truth: $(sed -n 's/^published //p' "${d3}/rmse.txt")"
+    note "    the offline core on the same events: $(sed -n 's/^offline core: //p' "${d3}/rmse.txt")"
   else
     note "  D-eDVS session: scoring FAILED (see demo_output/dedvs/rmse.txt)"
     status=1
