@@ -197,6 +197,19 @@ TEST(Ebslam3dPlayback, PosesMapAndFramesTrackTheGroundTruthLikeTheOfflineCore) {
   std::string tf_error;
   EXPECT_TRUE(tf_buffer.canTransform("map", "camera_rgb_optical_frame", ros::Time(0), &tf_error))
       << tf_error;
+  // The rig's transform is the calibration's: eDVS-frame points into the depth camera's frame.
+  if (tf_buffer.canTransform("camera_rgb_optical_frame", "edvs_optical_frame", ros::Time(0))) {
+    const geometry_msgs::TransformStamped rig =
+        tf_buffer.lookupTransform("camera_rgb_optical_frame", "edvs_optical_frame", ros::Time(0));
+    const Eigen::Vector3d t = sensors.depth_from_edvs.translation();
+    EXPECT_NEAR(rig.transform.translation.x, t.x(), 1e-6);
+    EXPECT_NEAR(rig.transform.translation.y, t.y(), 1e-6);
+    EXPECT_NEAR(rig.transform.translation.z, t.z(), 1e-6);
+    const Eigen::Quaterniond q(sensors.depth_from_edvs.rotation());
+    const Eigen::Quaterniond r(rig.transform.rotation.w, rig.transform.rotation.x,
+                               rig.transform.rotation.y, rig.transform.rotation.z);
+    EXPECT_LT(q.angularDistance(r), 1e-6);
+  }
   spinner.stop();
 
   std::lock_guard<std::mutex> lock(rec.mutex);
