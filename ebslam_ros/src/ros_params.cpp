@@ -3,6 +3,7 @@
 #include "ebslam_ros/flat_yaml.h"
 
 #include <ebslam_msgs/ros_param_helpers.h>
+#include <ros/names.h>
 
 #include <ebslam/dedvs_io.h>
 
@@ -420,6 +421,26 @@ class ScenarioParams {
 
 }  // namespace
 
+namespace {
+
+// ~start_when_subscribed: space-separated topic names, relative ones resolved in the node's
+// namespace (the parent of its private one).
+std::vector<std::string> topicList(const ros::NodeHandle& nh, const std::string& name) {
+  std::istringstream words(param<std::string>(nh, name, ""));
+  const std::string node_namespace = ros::names::parentNamespace(nh.getNamespace());
+  std::vector<std::string> topics;
+  for (std::string topic; words >> topic;) {
+    try {
+      topics.push_back(ros::names::resolve(node_namespace, topic, false));
+    } catch (const ros::InvalidNameException& error) {
+      fail(nh, name, "'" + topic + "' is not a valid topic name (" + error.what() + ")");
+    }
+  }
+  return topics;
+}
+
+}  // namespace
+
 EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
                                                       const std::string& default_scenario) {
   EventSimulatorNodeConfig c;
@@ -450,6 +471,7 @@ EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
   c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.start_when_subscribed = topicList(nh, "start_when_subscribed");
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
   c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
@@ -586,10 +608,12 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   requirePositive(c.speed, nh, "speed");
   c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
   requirePositive(c.publish_rate_hz, nh, "publish_rate");
+  c.loop = param<bool>(nh, "loop", c.loop);
   c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.start_when_subscribed = topicList(nh, "start_when_subscribed");
   const int seed = param<int>(nh, "seed", static_cast<int>(c.simulator.seed));
   if (seed < 0) fail(nh, "seed", "must not be negative");
   c.simulator.seed = c.simulator.events.seed = c.room.seed = static_cast<std::uint64_t>(seed);
