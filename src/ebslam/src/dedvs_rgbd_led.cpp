@@ -231,7 +231,7 @@ RgbdLedObservation findRgbdLed(const std::vector<RgbdLedFrame>& frames,
     return result;
   }
   // A second blinking spot away from the first.
-  const double exclusion = 2.0 * config.spot_radius_px;
+  const double exclusion = config.spot_radius_px;
   for (std::size_t i = 0; i < pixels; ++i) {
     if (magnitude[i] <= std::max(detectable, config.max_second_peak_ratio * result.amplitude)) {
       continue;
@@ -242,33 +242,42 @@ RgbdLedObservation findRgbdLed(const std::vector<RgbdLedFrame>& frames,
       return result;
     }
   }
-  // Weighted centroid of the in-phase amplitude (noise of random phase averages out) around
-  // the peak, then around the first centroid.
+  // The spot: the 8-connected region of pixels around the peak whose in-phase amplitude (noise
+  // of random phase averages out) reaches min_weight_fraction of the peak, within
+  // spot_radius_px; its weighted centroid. A region, not a disc around the peak: a near LED
+  // saturates a flat-topped spot whose brightest pixel may lie anywhere on the top.
   const std::complex<double> reference = amplitude[peak] / std::abs(amplitude[peak]);
-  const int reach = static_cast<int>(std::ceil(config.spot_radius_px)) + 1;
+  const double min_weight = config.min_weight_fraction * result.amplitude;
+  const Eigen::Vector2d peak_pixel = centre;
+  std::vector<std::uint8_t> visited(pixels, 0);
+  std::vector<std::size_t> stack{peak};
+  visited[peak] = 1;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  double total = 0.0;
   bool at_border = false;
-  for (int pass = 0; pass < 2; ++pass) {
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    double total = 0.0;
-    at_border = false;
-    const int cx = static_cast<int>(std::lround(centre.x()));
-    const int cy = static_cast<int>(std::lround(centre.y()));
-    for (int row = std::max(0, cy - reach); row <= std::min(height - 1, cy + reach); ++row) {
-      for (int col = std::max(0, cx - reach); col <= std::min(width - 1, cx + reach); ++col) {
-        const Eigen::Vector2d pixel(col, row);
-        if ((pixel - centre).norm() > config.spot_radius_px) continue;
-        const std::size_t i = static_cast<std::size_t>(row) * width + col;
-        const double weight = (amplitude[i] * std::conj(reference)).real();
-        if (weight < config.min_weight_fraction * result.amplitude) continue;
-        sum += weight * pixel;
-        total += weight;
-        const int m = config.border_margin_px;
-        if (col < m || row < m || col >= width - m || row >= height - m) at_border = true;
+  while (!stack.empty()) {
+    const std::size_t i = stack.back();
+    stack.pop_back();
+    const int col = static_cast<int>(i % width), row = static_cast<int>(i / width);
+    const double weight = (amplitude[i] * std::conj(reference)).real();
+    sum += weight * Eigen::Vector2d(col, row);
+    total += weight;
+    const int m = config.border_margin_px;
+    if (col < m || row < m || col >= width - m || row >= height - m) at_border = true;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int c = col + dx, r = row + dy;
+        if (c < 0 || r < 0 || c >= width || r >= height) continue;
+        const std::size_t j = static_cast<std::size_t>(r) * width + c;
+        if (visited[j] != 0) continue;
+        visited[j] = 1;
+        if ((Eigen::Vector2d(c, r) - peak_pixel).norm() > config.spot_radius_px) continue;
+        if ((amplitude[j] * std::conj(reference)).real() < min_weight) continue;
+        stack.push_back(j);
       }
     }
-    centre = sum / total;  // total > 0: the peak itself qualifies in the first pass
-    if (!(total > 0.0)) break;
   }
+  centre = sum / total;  // total > 0: the peak itself has weight result.amplitude
   result.pixel = centre;
   if (at_border || !centre.allFinite()) {
     result.status = RgbdLedStatus::kAtBorder;

@@ -40,7 +40,7 @@ struct RgbdLedConfig {
   /// change (the blinking LED itself).
   double change_threshold = 12.0;
   int max_changed_pixels = 60;
-  double led_exclusion_radius_px = 20.0;
+  double led_exclusion_radius_px = 25.0;
   /// Still frames needed for an observation (the blink is sampled once per frame); a longer
   /// rest is split into observations of at most max_frames.
   int min_frames = 5;
@@ -57,11 +57,13 @@ struct RgbdLedConfig {
   /// the LED frequency explains must reach this (a light blinking at another frequency leaks
   /// into the LED frequency's amplitude over few frames, with a low share).
   double min_explained_variance = 0.5;
-  /// Spot: pixels within spot_radius_px of the strongest (then of the first centroid) whose
-  /// in-phase amplitude reaches min_weight_fraction of the peak; weighted centroid.
-  double spot_radius_px = 10.0;
+  /// Spot: the connected pixels around the strongest whose in-phase amplitude reaches
+  /// min_weight_fraction of the peak, within spot_radius_px of it; weighted centroid. The
+  /// radius must exceed the LED's spot (a saturated spot is flat-topped: its strongest pixel
+  /// lies anywhere on the top).
+  double spot_radius_px = 25.0;
   double min_weight_fraction = 0.2;
-  /// Another detectable blinking pixel farther than 2 spot_radius_px from the LED with more
+  /// Another detectable blinking pixel farther than spot_radius_px from the LED with more
   /// than this fraction of its amplitude makes the observation ambiguous (a second light).
   double max_second_peak_ratio = 0.35;
   int border_margin_px = 2;  ///< spot pixels this close to the border: no observation [px]
