@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -120,17 +120,6 @@ cv::Mat depthOf(const sensor_msgs::Image& msg, const std::string& topic) {
   return depth;
 }
 
-void copyInTimeOrder(const std::string& unordered_path, const std::string& path,
-                     const std::string& compression) {
-  rosbag::Bag unordered(unordered_path, rosbag::bagmode::Read);
-  rosbag::Bag ordered(path, rosbag::bagmode::Write);
-  if (compression == "bz2") ordered.setCompression(rosbag::compression::BZ2);
-  if (compression == "lz4") ordered.setCompression(rosbag::compression::LZ4);
-  for (const rosbag::MessageInstance& m : rosbag::View(unordered)) {
-    ordered.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
-  }
-}
-
 }  // namespace
 
 SimulatedCalibrationBag writeSimulatedCalibrationBag(
@@ -146,13 +135,35 @@ SimulatedCalibrationBag writeSimulatedCalibrationBag(
   const CalibrationBagTopics& topics = options.topics;
   const ebslam::PinholeCamera& camera = options.run.simulator.depth.camera;
   const ebslam::CameraModel& edvs = options.run.simulator.edvs;
-  // Frames go into an unordered bag while simulating, the events (outliers are added at the
-  // end) after it; then everything is copied in time order, as a recording is.
-  const std::string unordered_path = path + ".unordered";
+  // The frames are kept until the events are complete (the outlier events are added after the
+  // simulation), then everything is written in time order, as a recording is: a bag written
+  // topic by topic plays (and reads) many times slower, every message loading another chunk.
+  struct Frame {
+    double stamp_s;
+    cv::Mat colour, depth_mm;
+  };
+  std::vector<Frame> frames;
+  const auto on_frame = [&frames](const ebslam::DepthFrame& frame) {
+    frames.push_back({frame.stamp_s, frame.colour.clone(), frame.depth_mm.clone()});
+  };
+  const ebslam::LedCalibrationRun run = ebslam::simulateLedCalibrationRun(options.run, on_frame);
   SimulatedCalibrationBag written;
-  {
-    rosbag::Bag bag(unordered_path, rosbag::bagmode::Write);
-    const auto on_frame = [&](const ebslam::DepthFrame& frame) {
+  written.truth = run.truth;
+  written.events = run.events.size();
+  written.outlier_events = run.outlier_events;
+  written.duration_s = run.duration_s;
+  written.frames = frames.size();
+
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  if (options.compression == "bz2") bag.setCompression(rosbag::compression::BZ2);
+  if (options.compression == "lz4") bag.setCompression(rosbag::compression::LZ4);
+  std::size_t next_frame = 0;
+  // Frames up to (and at) ROS time `until` [s].
+  const auto write_frames = [&](double until) {
+    for (;
+         next_frame < frames.size() && options.clock_origin_s + frames[next_frame].stamp_s <= until;
+         ++next_frame) {
+      const Frame& frame = frames[next_frame];
       std_msgs::Header header;
       header.stamp = ros::Time(options.clock_origin_s + frame.stamp_s);
       header.frame_id = kColourFrame;
@@ -162,48 +173,41 @@ SimulatedCalibrationBag writeSimulatedCalibrationBag(
                                                       camera.fy, camera.cx, camera.cy, header);
       bag.write(topics.colour_info, header.stamp, info);
       bag.write(topics.camera_info, header.stamp, info);
-      ++written.frames;
-    };
-    const ebslam::LedCalibrationRun run = ebslam::simulateLedCalibrationRun(options.run, on_frame);
-    written.truth = run.truth;
-    written.events = run.events.size();
-    written.outlier_events = run.outlier_events;
-    written.duration_s = run.duration_s;
-
-    // Event messages as the driver sends them: batches of 1 / event_message_rate_hz.
-    ebslam::EventClock clock;
-    clock.anchor(0, ebslam_msgs::toMicroseconds(ros::Time(options.clock_origin_s)));
-    const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
-    const ebslam::SensorSize sensor{static_cast<std::uint32_t>(edvs.width),
-                                    static_cast<std::uint32_t>(edvs.height)};
-    ebslam::EventVector batch;
-    std::size_t messages = 0;
-    auto flush = [&]() {
-      if (batch.empty()) return;
-      const ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(batch, sensor, kEdvsFrame);
-      bag.write(topics.events, msg.header.stamp, msg);
-      if (messages++ % 10 == 0) {
-        bag.write(topics.edvs_info, msg.header.stamp,
-                  cameraInfo(edvs.width, edvs.height, edvs.focal_px, edvs.focal_px,
-                             edvs.principal_point.x(), edvs.principal_point.y(), msg.header));
-      }
-      batch.clear();
-    };
-    std::int64_t batch_end_us = period_us;
-    for (const ebslam::Event& e : run.events) {
-      while (e.t_us >= batch_end_us) {
-        flush();
-        batch_end_us += period_us;
-      }
-      ebslam::Event stamped = e;
-      stamped.t_us = clock.stamp(e.t_us).value_or(0);
-      batch.push_back(stamped);
     }
-    flush();
-    bag.close();
+  };
+  // Event messages as the driver sends them: batches of 1 / event_message_rate_hz.
+  ebslam::EventClock clock;
+  clock.anchor(0, ebslam_msgs::toMicroseconds(ros::Time(options.clock_origin_s)));
+  const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
+  const ebslam::SensorSize sensor{static_cast<std::uint32_t>(edvs.width),
+                                  static_cast<std::uint32_t>(edvs.height)};
+  ebslam::EventVector batch;
+  std::size_t messages = 0;
+  auto flush = [&]() {
+    if (batch.empty()) return;
+    const ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(batch, sensor, kEdvsFrame);
+    write_frames(msg.header.stamp.toSec());
+    bag.write(topics.events, msg.header.stamp, msg);
+    if (messages++ % 10 == 0) {
+      bag.write(topics.edvs_info, msg.header.stamp,
+                cameraInfo(edvs.width, edvs.height, edvs.focal_px, edvs.focal_px,
+                           edvs.principal_point.x(), edvs.principal_point.y(), msg.header));
+    }
+    batch.clear();
+  };
+  std::int64_t batch_end_us = period_us;
+  for (const ebslam::Event& e : run.events) {
+    while (e.t_us >= batch_end_us) {
+      flush();
+      batch_end_us += period_us;
+    }
+    ebslam::Event stamped = e;
+    stamped.t_us = clock.stamp(e.t_us).value_or(0);
+    batch.push_back(stamped);
   }
-  copyInTimeOrder(unordered_path, path, options.compression);
-  std::filesystem::remove(unordered_path);
+  flush();
+  write_frames(std::numeric_limits<double>::infinity());
+  bag.close();
   return written;
 }
 
