@@ -196,6 +196,8 @@ EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   config.map_publish_period_s =
       param<double>(nh, "map_publish_period", config.map_publish_period_s);
   requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  config.map_period_on_stamps =
+      param<bool>(nh, "map_period_on_stamps", config.map_period_on_stamps);
   return config;
 }
 
@@ -735,6 +737,10 @@ ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.lockstep = param<bool>(nh, "lockstep", c.lockstep);
+  if (c.lockstep && !c.publish_clock) fail(nh, "lockstep", "needs publish_clock");
+  c.lockstep_timeout_s = param<double>(nh, "lockstep_timeout", c.lockstep_timeout_s);
+  requirePositive(c.lockstep_timeout_s, nh, "lockstep_timeout");
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.base_frame = param<std::string>(nh, "base_frame", c.base_frame);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
