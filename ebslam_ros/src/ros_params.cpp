@@ -214,6 +214,11 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
       param<double>(nh, "sigma_position_time", c.sigma_position_per_sqrt_s);
   c.sigma_rotation_per_sqrt_s =
       param<double>(nh, "sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+  c.diffusion_min_scale = param<double>(nh, "diffusion_min_scale", c.diffusion_min_scale);
+  c.diffusion_max_scale = param<double>(nh, "diffusion_max_scale", c.diffusion_max_scale);
+  c.reference_angular_speed =
+      param<double>(nh, "reference_angular_speed", c.reference_angular_speed);
+  c.reference_linear_speed = param<double>(nh, "reference_linear_speed", c.reference_linear_speed);
   c.max_event_rate = param<double>(nh, "max_event_rate", c.max_event_rate);
   c.score_alpha = param<double>(nh, "score_alpha", c.score_alpha);
   c.voxel_size_m = param<double>(nh, "voxel_size", c.voxel_size_m);
