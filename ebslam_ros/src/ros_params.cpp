@@ -196,6 +196,8 @@ EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   config.map_publish_period_s =
       param<double>(nh, "map_publish_period", config.map_publish_period_s);
   requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  config.map_period_on_stamps =
+      param<bool>(nh, "map_period_on_stamps", config.map_period_on_stamps);
   return config;
 }
 
@@ -212,6 +214,11 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
       param<double>(nh, "sigma_position_time", c.sigma_position_per_sqrt_s);
   c.sigma_rotation_per_sqrt_s =
       param<double>(nh, "sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+  c.diffusion_min_scale = param<double>(nh, "diffusion_min_scale", c.diffusion_min_scale);
+  c.diffusion_max_scale = param<double>(nh, "diffusion_max_scale", c.diffusion_max_scale);
+  c.reference_angular_speed =
+      param<double>(nh, "reference_angular_speed", c.reference_angular_speed);
+  c.reference_linear_speed = param<double>(nh, "reference_linear_speed", c.reference_linear_speed);
   c.max_event_rate = param<double>(nh, "max_event_rate", c.max_event_rate);
   c.score_alpha = param<double>(nh, "score_alpha", c.score_alpha);
   c.voxel_size_m = param<double>(nh, "voxel_size", c.voxel_size_m);
@@ -735,6 +742,10 @@ ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.lockstep = param<bool>(nh, "lockstep", c.lockstep);
+  if (c.lockstep && !c.publish_clock) fail(nh, "lockstep", "needs publish_clock");
+  c.lockstep_timeout_s = param<double>(nh, "lockstep_timeout", c.lockstep_timeout_s);
+  requirePositive(c.lockstep_timeout_s, nh, "lockstep_timeout");
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.base_frame = param<std::string>(nh, "base_frame", c.base_frame);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);

@@ -103,6 +103,9 @@ struct EventSlam2dNodeConfig {
   /// ~normalisation_step, ~normalisation_prior
   ebslam::Ebslam2dConfig slam;
   double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
+  /// ~map_period_on_stamps: count ~map_publish_period in event time (the stamps) instead of
+  /// wall time: maps at the same points of the data at any pace (exploration in lockstep).
+  bool map_period_on_stamps = false;
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
 
@@ -303,6 +306,11 @@ struct ClosedLoopSimulatorNodeConfig {
   bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
   double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the start with /clock [s]
   bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  /// ~lockstep (needs ~publish_clock): each step waits for the localisation's pose of its events
+  /// and the controller's cmd_vel on its clock tick (the offline tool's loop; file comment of
+  /// closed_loop_simulator_nodelet.cpp).
+  bool lockstep = false;
+  double lockstep_timeout_s = 2.0;  ///< ~lockstep_timeout: longest wait of a step [s, wall]
   std::string frame_id = "edvs_optical_frame";      ///< ~frame_id: the events' frame
   std::string base_frame = "base_link";             ///< ~base_frame: the bump readings' frame
   std::string map_frame = "map";                    ///< ~map_frame: origin at the start pose
