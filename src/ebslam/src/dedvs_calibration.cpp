@@ -261,7 +261,8 @@ void addOutlierEvents(const LedCalibrationRunConfig& config, std::mt19937_64& rn
 
 }  // namespace
 
-LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config) {
+LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config,
+                                            const DedvsSimulator::DepthSink& frame_sink) {
   config.validate();
   const DedvsSimulatorConfig& sim = config.simulator;
   const DedvsSimulator simulator(sim);
@@ -298,6 +299,7 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
         for (const TrueDepthEvent& e : batch) run.events.push_back(e.event);
       },
       [&](const DepthFrame& frame) {
+        if (frame_sink) frame_sink(frame);
         frames.push_back(frame.depth_mm);
         frame_times.push_back(frame.t_s);
       },
@@ -331,8 +333,8 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
 void LedExtractionConfig::validate() const {
   require(std::isfinite(led_frequency_hz) && led_frequency_hz > 0.0,
           "LedExtractionConfig: led_frequency_hz must be positive");
-  require(window_periods >= 2 && window_periods <= 32,
-          "LedExtractionConfig: window_periods must lie in [2, 32]");
+  require(window_periods >= 2 && window_periods <= 64,
+          "LedExtractionConfig: window_periods must lie in [2, 64]");
   require(min_cycle_fraction > 0.0 && min_cycle_fraction <= 1.0,
           "LedExtractionConfig: min_cycle_fraction must lie in (0, 1]");
   require(min_phase_coherence >= 0.0 && min_phase_coherence <= 1.0,
@@ -360,7 +362,7 @@ std::optional<LedObservation> extractLed(const std::vector<Event>& events, doubl
                        [](const Event& e, double t) { return static_cast<double>(e.t_us) < t; });
 
   struct Cell {
-    std::uint32_t on = 0, off = 0;  // periods with an ON / OFF event (bit per period)
+    std::uint64_t on = 0, off = 0;  // periods with an ON / OFF event (bit per period)
     double re[2] = {0.0, 0.0};      // sum of p_k exp(-2 pi i f t_k), per half window
     double im[2] = {0.0, 0.0};
     int count = 0;
@@ -376,7 +378,7 @@ std::optional<LedObservation> extractLed(const std::vector<Event>& events, doubl
     const double dt = static_cast<double>(it->t_us) - begin_us;
     const int bin = std::min(config.window_periods - 1, static_cast<int>(dt / period_us));
     const double sign = it->polarity ? 1.0 : -1.0;
-    (it->polarity ? cell.on : cell.off) |= 1u << bin;
+    (it->polarity ? cell.on : cell.off) |= std::uint64_t{1} << bin;
     const int h = bin < config.window_periods / 2 ? 0 : 1;
     cell.re[h] += sign * std::cos(omega * dt);
     cell.im[h] -= sign * std::sin(omega * dt);
@@ -385,11 +387,11 @@ std::optional<LedObservation> extractLed(const std::vector<Event>& events, doubl
   // Cycles are counted per half window: a pixel the LED leaves or reaches halfway through the
   // window (the plate starts or stops moving) does not qualify.
   const int half = config.window_periods / 2;
-  const std::uint32_t first_half = (1u << half) - 1u;
+  const std::uint64_t first_half = (std::uint64_t{1} << half) - 1u;
   const int min_cycles_first = static_cast<int>(std::ceil(config.min_cycle_fraction * half - 1e-9));
   const int min_cycles_second = static_cast<int>(
       std::ceil(config.min_cycle_fraction * (config.window_periods - half) - 1e-9));
-  auto popcount = [](std::uint32_t bits) {
+  auto popcount = [](std::uint64_t bits) {
     int n = 0;
     for (; bits != 0; bits &= bits - 1) ++n;
     return n;
@@ -403,7 +405,7 @@ std::optional<LedObservation> extractLed(const std::vector<Event>& events, doubl
   std::size_t best_pixel = 0;
   for (std::size_t i : touched) {
     const Cell& cell = cells[i];
-    const std::uint32_t both = cell.on & cell.off;
+    const std::uint64_t both = cell.on & cell.off;
     if (popcount(both & first_half) < min_cycles_first ||
         popcount(both & ~first_half) < min_cycles_second) {
       continue;

@@ -406,6 +406,9 @@ void DepthCameraConfig::validate() const {
   require(std::isfinite(clock_offset_s), "DepthCameraConfig: clock_offset_s must be finite");
   require(std::isfinite(colour_noise_sigma) && colour_noise_sigma >= 0.0,
           "DepthCameraConfig: colour_noise_sigma must be >= 0");
+  require(std::isfinite(colour_exposure_s) && colour_exposure_s >= 0.0 &&
+              colour_exposure_s * frame_rate_hz <= 1.0,
+          "DepthCameraConfig: colour_exposure_s must lie in [0, 1 / frame_rate_hz]");
 }
 
 CameraModel DedvsSimulatorConfig::defaultEdvsCamera() {
@@ -495,12 +498,7 @@ class Session {
     for (const BlinkingLed& led : leds) {
       const double phase = std::fmod((t_s - led.phase_s) * led.frequency_hz, 1.0);
       if (!((phase < 0.0 ? phase + 1.0 : phase) < 0.5)) continue;
-      Eigen::Vector3d world = led.position;
-      if (led.plane_index >= 0) {
-        const PreparedPlane& p = renderer_.planes()[static_cast<std::size_t>(led.plane_index)];
-        world = p.origin + led.position.x() * p.axis_u + led.position.y() * p.axis_v +
-                led.position.z() * p.normal;
-      }
+      const Eigen::Vector3d world = ledWorldPosition(led);
       const Eigen::Vector3d in_edvs = edvs_pose.inverse() * world;
       const std::optional<Eigen::Vector2d> pixel = config_.edvs.project(in_edvs);
       if (!pixel || !config_.edvs.isInside(*pixel)) continue;
@@ -522,12 +520,64 @@ class Session {
     }
   }
 
-  DepthFrame renderDepth(const Eigen::Isometry3d& rig, double t_s, std::uint64_t frame_index) {
+  Eigen::Vector3d ledWorldPosition(const BlinkingLed& led) {
+    if (led.plane_index < 0) return led.position;
+    const PreparedPlane& p = renderer_.planes()[static_cast<std::size_t>(led.plane_index)];
+    return p.origin + led.position.x() * p.axis_u + led.position.y() * p.axis_v +
+           led.position.z() * p.normal;
+  }
+
+  // Adds the LEDs to the colour camera's linear shade: a spot (sigma 0.6 px or the disc's
+  // image) scaled by the LED's on-time fraction during the exposure centred on t_s (an
+  // instantaneous sample for a zero exposure), when not occluded.
+  void addLedsToColour(const Eigen::Isometry3d& rig, double t_s,
+                       const std::vector<BlinkingLed>& leds) {
+    const PinholeCamera& cam = config_.depth.camera;
+    const double exposure = config_.depth.colour_exposure_s;
+    for (const BlinkingLed& led : leds) {
+      double on_fraction = 0.0;
+      if (exposure > 0.0) {
+        // Integral of the square wave (on in the first half of each period) over the exposure.
+        const auto on_time = [&led](double t) {
+          const double cycles = (t - led.phase_s) * led.frequency_hz;
+          const double whole = std::floor(cycles);
+          return (0.5 * whole + std::min(cycles - whole, 0.5)) / led.frequency_hz;
+        };
+        on_fraction = (on_time(t_s + 0.5 * exposure) - on_time(t_s - 0.5 * exposure)) / exposure;
+      } else {
+        const double phase = std::fmod((t_s - led.phase_s) * led.frequency_hz, 1.0);
+        on_fraction = (phase < 0.0 ? phase + 1.0 : phase) < 0.5 ? 1.0 : 0.0;
+      }
+      if (!(on_fraction > 0.0)) continue;
+      const Eigen::Vector3d in_camera = rig.inverse() * ledWorldPosition(led);
+      if (!(in_camera.z() > 1e-3)) continue;
+      const Eigen::Vector2d pixel(cam.fx * in_camera.x() / in_camera.z() + cam.cx,
+                                  cam.fy * in_camera.y() / in_camera.z() + cam.cy);
+      const int cx = static_cast<int>(std::lround(pixel.x()));
+      const int cy = static_cast<int>(std::lround(pixel.y()));
+      if (cx < 0 || cy < 0 || cx >= cam.width || cy >= cam.height) continue;
+      const std::size_t centre = static_cast<std::size_t>(cy) * cam.width + cx;
+      if (depth_hits_.z[centre] < in_camera.z() * 0.98 - 0.01) continue;  // occluded
+      const double sigma = std::max(0.6, cam.fx * led.radius_m / in_camera.z());
+      const int reach = static_cast<int>(std::ceil(3.0 * sigma));
+      for (int y = std::max(0, cy - reach); y <= std::min(cam.height - 1, cy + reach); ++y) {
+        for (int x = std::max(0, cx - reach); x <= std::min(cam.width - 1, cx + reach); ++x) {
+          const double d2 = (Eigen::Vector2d(x, y) - pixel).squaredNorm();
+          shade_[static_cast<std::size_t>(y) * cam.width + x] += static_cast<float>(
+              on_fraction * led.on_intensity * std::exp(-0.5 * d2 / (sigma * sigma)));
+        }
+      }
+    }
+  }
+
+  DepthFrame renderDepth(const Eigen::Isometry3d& rig, double t_s, std::uint64_t frame_index,
+                         const std::vector<BlinkingLed>& leds) {
     const DepthCameraConfig& dc = config_.depth;
     const PinholeCamera& cam = dc.camera;
     const std::size_t n = depth_grid_.x.size();
     renderer_.trace(rig, depth_grid_, depth_hits_);
     renderer_.shade(rig, depth_grid_, depth_hits_, shade_);
+    addLedsToColour(rig, t_s, leds);
     const Eigen::Vector3d projector_offset = dc.baseline_m * dc.projector_direction.normalized();
     Eigen::Isometry3d projector = rig;
     projector.translation() = rig * projector_offset;
@@ -792,7 +842,7 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
     while (next_frame_s <= up_to_s) {
       session.movePlanes(moving_planes, next_frame_s);
       const Eigen::Isometry3d frame_rig = toIsometry(interpolatePose(rig_trajectory, next_frame_s));
-      DepthFrame frame = session.renderDepth(frame_rig, next_frame_s, frame_index);
+      DepthFrame frame = session.renderDepth(frame_rig, next_frame_s, frame_index, leds);
       if (depth_sink) depth_sink(frame);
       ++frame_index;
       next_frame_s = t_begin_s + static_cast<double>(frame_index) * frame_period_s;

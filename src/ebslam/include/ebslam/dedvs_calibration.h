@@ -84,9 +84,11 @@ struct LedCalibrationRun {
   double duration_s = 0.0;
 };
 
-/// Simulates a calibration run. Deterministic for a given config. Throws
-/// std::invalid_argument for an invalid config.
-LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config = {});
+/// Simulates a calibration run. Deterministic for a given config. Every depth frame (with its
+/// registered colour image, the LED visible in it) also goes to `frame_sink` when given, in time
+/// order. Throws std::invalid_argument for an invalid config.
+LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& config = {},
+                                            const DedvsSimulator::DepthSink& frame_sink = {});
 
 // ---------------------------------------------------------------------------------------------
 // LED extraction from the event stream.
@@ -100,7 +102,7 @@ LedCalibrationRun simulateLedCalibrationRun(const LedCalibrationRunConfig& confi
 /// near the strongest one, weighted by their coherent event count, refined once around itself.
 struct LedExtractionConfig {
   double led_frequency_hz = 250.0;   ///< known LED frequency [Hz]
-  int window_periods = 8;            ///< window length in periods, in [2, 32]
+  int window_periods = 8;            ///< window length in periods, in [2, 64]
   double min_cycle_fraction = 0.75;  ///< in (0, 1]
   double min_phase_coherence = 0.5;  ///< in [0, 1]
   /// LED pixels farther than this from the strongest one (then from the first centroid) are

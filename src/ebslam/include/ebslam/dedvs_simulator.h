@@ -66,6 +66,10 @@ struct DepthCameraConfig {
   double clock_offset_s = 0.012;
   /// Colour image noise, sigma in 8-bit grey levels.
   double colour_noise_sigma = 2.0;
+  /// Exposure time of the colour image, centred on the frame's time [s]: a blinking LED's
+  /// brightness is its on-time fraction during the exposure (a calibration run sets the camera
+  /// to a short fixed exposure so that the LED blinks from frame to frame).
+  double colour_exposure_s = 0.002;
 
   void validate() const;
 };
@@ -131,8 +135,8 @@ struct DedvsRun {
 };
 
 /// A light source on a plane of the scene whose emitted intensity follows a square wave (the
-/// pulsed calibration diode of thesis 8.2). Seen by the eDVS as a small disc, by the depth
-/// camera not at all.
+/// pulsed calibration diode of thesis 8.2). Seen by the eDVS and the colour camera as a small
+/// disc (the colour camera integrates it over its exposure), by the depth camera not at all.
 struct BlinkingLed {
   /// Position [m] in the frame of the plane it is fixed to (plane index, see Scene), or in the
   /// world when plane_index < 0.

@@ -1,0 +1,83 @@
+#pragma once
+
+// D-eDVS calibration (thesis 8.2, eq. 8.5) from a recorded bag, and the simulated calibration
+// bag that proves it without hardware. The bag carries the sensors' topics as record.launch
+// records them: eDVS events (ebslam_msgs/EventArray), the colour image (bgr8, rgb8, mono8 or
+// bgra8), the depth image registered to it (16UC1 mm or 32FC1 m) and its camera_info. The
+// LED finding, pairing and solving are the core's (ebslam/dedvs_rgbd_led.h,
+// ebslam/dedvs_calibration.h); this file only reads and writes bags.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "ebslam/dedvs_calibration.h"
+#include "ebslam/dedvs_io.h"
+#include "ebslam/dedvs_rgbd_led.h"
+
+namespace ebslam_ros {
+
+struct CalibrationBagTopics {
+  std::string events = "/edvs/events";
+  std::string colour = "/camera/rgb/image_rect_color";
+  std::string depth = "/camera/depth_registered/image_raw";
+  std::string camera_info = "/camera/depth_registered/camera_info";
+  std::string colour_info = "/camera/rgb/camera_info";  ///< written, not read
+  std::string edvs_info = "/edvs/camera_info";          ///< written, not read
+};
+
+struct SimulatedCalibrationBagOptions {
+  /// The calibration run (plate poses, LED, sensors, outlier events, seeds).
+  ebslam::LedCalibrationRunConfig run;
+  CalibrationBagTopics topics;
+  /// ROS time of simulated time 0 [s] (a plausible wall-clock time).
+  double clock_origin_s = 1.7e9;
+  double event_message_rate_hz = 100.0;  ///< EventArray messages per second (the driver's)
+  std::string compression = "none";      ///< none, lz4 or bz2
+};
+
+struct SimulatedCalibrationBag {
+  ebslam::DedvsSensors truth;  ///< the simulated sensors and their true calibration
+  std::size_t events = 0;      ///< outliers included
+  std::size_t outlier_events = 0;
+  std::size_t frames = 0;
+  double duration_s = 0.0;
+};
+
+/// Simulates a calibration run and writes it to `path` as the real topics carry it (frames
+/// stamped on the depth camera's clock). Throws std::invalid_argument for invalid options,
+/// rosbag::BagException on I/O failure.
+SimulatedCalibrationBag writeSimulatedCalibrationBag(const std::string& path,
+                                                     const SimulatedCalibrationBagOptions& options);
+
+struct BagCalibrationOptions {
+  CalibrationBagTopics topics;
+  double led_frequency_hz = 250.0;  ///< the LED's known frequency [Hz]
+  /// Depth camera clock: event time = frame stamp - depth_clock_offset_s [s]; written into
+  /// the result's sensors.
+  double depth_clock_offset_s = 0.0;
+  ebslam::RgbdLedConfig rgbd;            ///< led_frequency_hz is set from above
+  ebslam::LedExtractionConfig edvs;      ///< frequency and sensor size are set from the bag
+  ebslam::LedPairingConfig pairing;      ///< depth_clock_offset_s is set from above
+  ebslam::DedvsCalibrationConfig solve;  ///< initial eDVS size is set from the bag
+};
+
+struct BagCalibration {
+  std::size_t events = 0;
+  std::size_t frames = 0;      ///< colour frames paired with a depth frame
+  double frame_rate_hz = 0.0;  ///< median over the frame stamps
+  ebslam::LedPairing pairing;  ///< poses: pairing.correspondences
+  /// The solution; empty when there were too few poses to solve.
+  std::optional<ebslam::DedvsCalibrationResult> result;
+  /// Why the calibration failed or cannot be trusted, in words a user can act on; empty on
+  /// success.
+  std::string problem;
+};
+
+/// Reads the bag and calibrates. Throws std::runtime_error naming the topic for a bag without
+/// events, frames or camera_info, or with an unsupported image encoding; rosbag::BagException
+/// when the file cannot be read.
+BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOptions& options);
+
+}  // namespace ebslam_ros
