@@ -12,14 +12,24 @@
 //    while subscribed, the last ~path_length poses) and tf ~map_frame -> ~ground_truth_frame:
 //    the true sensor (optical frame) pose at each step's end, as EventSimulator;
 //  - floor_plan (visualization_msgs/Marker, latched): walls and obstacles as lines;
-//  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+//  - /clock (with ~publish_clock; run the other nodes with use_sim_time);
+//  - lockstep/pose (geometry_msgs/PoseWithCovarianceStamped, in, with ~lockstep): the pose of the
+//    localisation that consumes `events` (EventSlam2d's `pose`, stamped with its last event).
 // Frames: ~map_frame has its origin at the robot's start pose (x forward, z up), which is where
 // EventSlam2d's map frame lies with its default ~initial_pose (0, 0, 0) and an identity mount.
 // Time: simulated time t [s] is stamped anchor + t / ~speed (anchor: wall time at the start) or
 // ~clock_start + t with /clock; steps are paced at ~speed times real time (or run as fast as
 // they are simulated when that is slower). The simulation runs in a thread of its own.
+// Lockstep (~lockstep, needs ~publish_clock): the closed loop of the offline tool ebslam_explore
+// (ebslam/exploration_run.h) through ROS, independent of the machine's load. After each step the
+// simulator waits until lockstep/pose carries the stamp of the step's last event (the
+// localisation has processed them all), then publishes /clock at the step's end and waits for the
+// next cmd_vel (the controller's step on that clock tick, e.g. Exploration with ~control_rate =
+// 1 / ~step), which drives the next step. A wait longer than ~lockstep_timeout (wall) is logged
+// and the step goes on with what arrived. ~speed is then an upper bound of the pace.
 #include <ebslam_msgs/Bump.h>
 #include <ebslam_msgs/ros_param_helpers.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
@@ -33,7 +43,9 @@
 #include <ebslam/simulator_scenes.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -50,6 +62,7 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
  public:
   ~ClosedLoopSimulatorNodelet() override {
     stop_ = true;
+    arrived_.notify_all();
     if (worker_.joinable()) worker_.join();
   }
 
@@ -73,15 +86,53 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
                           static_cast<std::size_t>(config_.path_length));
     plan_pub_ = nh.advertise<visualization_msgs::Marker>("floor_plan", 1, true);
     if (config_.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
-    cmd_sub_ = nh.subscribe("cmd_vel", 10, &ClosedLoopSimulatorNodelet::onCommand, this);
-    NODELET_INFO("closed-loop simulation of '%s' (%s), step %.3f s at %.2fx%s", plan_.name.c_str(),
-                 config_.floor_plan.c_str(), config_.step_s, config_.speed,
-                 config_.publish_clock ? " with /clock" : "");
+    cmd_sub_ = nh.subscribe("cmd_vel", 10, &ClosedLoopSimulatorNodelet::onCommand, this,
+                            ros::TransportHints().tcpNoDelay());
+    if (config_.lockstep) {
+      pose_sub_ = nh.subscribe("lockstep/pose", 10, &ClosedLoopSimulatorNodelet::onPose, this,
+                               ros::TransportHints().tcpNoDelay());
+    }
+    NODELET_INFO("closed-loop simulation of '%s' (%s), step %.3f s at %.2fx%s%s",
+                 plan_.name.c_str(), config_.floor_plan.c_str(), config_.step_s, config_.speed,
+                 config_.publish_clock ? " with /clock" : "",
+                 config_.lockstep ? " in lockstep with lockstep/pose and cmd_vel" : "");
     worker_ = std::thread([this] { run(); });
   }
 
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (msg->header.stamp > pose_stamp_) pose_stamp_ = msg->header.stamp;
+    }
+    arrived_.notify_all();
+  }
+
+  // Lockstep: waits (wall time) until `done` holds under mutex_; false (logged) on a timeout.
+  template <typename Predicate>
+  bool waitFor(Predicate done, const char* what) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const bool ok =
+        arrived_.wait_for(lock, std::chrono::duration<double>(config_.lockstep_timeout_s),
+                          [&] { return stop_ || done(); });
+    if (!ok) {
+      ++lockstep_timeouts_;
+      const ros::WallTime now = ros::WallTime::now();
+      if (lockstep_warned_.isZero() || (now - lockstep_warned_).toSec() >= kWarnPeriodS) {
+        lockstep_warned_ = now;
+        NODELET_WARN("lockstep: no %s within %.1f s (wall); going on (%zu such waits so far)", what,
+                     config_.lockstep_timeout_s, lockstep_timeouts_);
+      }
+    }
+    return ok;
+  }
+
   void onCommand(const geometry_msgs::Twist::ConstPtr& msg) {
+    struct Notify {
+      std::condition_variable& cv;
+      ~Notify() { cv.notify_all(); }
+    } notify{arrived_};
     std::lock_guard<std::mutex> lock(mutex_);
+    ++commands_;
     if (!std::isfinite(msg->linear.x) || !std::isfinite(msg->angular.z)) {
       command_.reset();  // brake
       const ros::WallTime now = ros::WallTime::now();
@@ -105,9 +156,13 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void run() {
-    if (config_.wait_for_subscribers) {
+    if (config_.wait_for_subscribers || config_.lockstep) {
       // roscpp counts a subscriber before its side of the connection is ready.
-      while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
+      while (!stop_ && (events_pub_.getNumSubscribers() == 0 ||
+                        (config_.lockstep && (pose_sub_.getNumPublishers() == 0 ||
+                                              cmd_sub_.getNumPublishers() == 0)))) {
+        ros::WallDuration(0.05).sleep();
+      }
       ros::WallDuration(0.5).sleep();
     }
     if (stop_) return;
@@ -145,7 +200,8 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
         if (stop_) break;
         const ros::Time stamp =
             ebslam_msgs::toRosTime(clock.map(std::llround(t * 1e6)).value_or(0));
-        if (config_.publish_clock) publishClock(stamp);
+        // Lockstep: the clock moves on only once the step's events are localised (below).
+        if (config_.publish_clock && !config_.lockstep) publishClock(stamp);
         for (ebslam::Event& e : events) e.t_us = clock.stamp(e.t_us).value_or(0);
         ebslam_msgs::EventArray msg = ebslam_msgs::toMsg(events, sensor, config_.frame_id);
         if (events.empty()) msg.header.stamp = stamp;
@@ -158,6 +214,19 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
         reading.direction = bump.contact() ? bump.direction_rad : 0.0;
         bump_pub_.publish(reading);
         publishGroundTruth(stamp);
+        if (config_.lockstep) {
+          if (!events.empty()) {
+            const ros::Time last_event = msg.header.stamp;
+            waitFor([&] { return pose_stamp_ >= last_event; }, "pose of the step's last event");
+          }
+          std::size_t commands = 0;
+          {
+            std::lock_guard<std::mutex> lock(mutex_);
+            commands = commands_;
+          }
+          publishClock(stamp);
+          waitFor([&] { return commands_ > commands; }, "cmd_vel after the clock tick");
+        }
       }
     } catch (const std::exception& error) {
       NODELET_ERROR("simulation failed: %s", error.what());
@@ -207,12 +276,17 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   ClosedLoopSimulatorNodeConfig config_;
   ebslam::FloorPlan plan_;
   std::unique_ptr<ebslam::ClosedLoopSimulator> simulator_;
-  std::mutex mutex_;  // guards command_, command_time_s_, sim_time_s_, warned_
+  std::mutex mutex_;  // guards command_, command_time_s_, sim_time_s_, warned_, lockstep state
+  std::condition_variable arrived_;  // lockstep: a pose or a command arrived
+  ros::Time pose_stamp_;             // lockstep: latest stamp on lockstep/pose
+  std::size_t commands_ = 0;         // cmd_vel messages received
+  std::size_t lockstep_timeouts_ = 0;
+  ros::WallTime lockstep_warned_;
   std::optional<ebslam::VelocityCommand> command_;
   double command_time_s_ = 0.0;  // simulated time of the last command's arrival [s]
   double sim_time_s_ = 0.0;
   ros::WallTime warned_, last_path_;
-  ros::Subscriber cmd_sub_;
+  ros::Subscriber cmd_sub_, pose_sub_;
   ros::Publisher events_pub_, bump_pub_, plan_pub_, clock_pub_;
   std::optional<GroundTruthPublisher> ground_truth_;
   std::atomic<bool> stop_{false};

@@ -12,7 +12,9 @@
 //    in ~edvs_frame, NaN where there is no depth;
 //  - depth_events/cloud (sensor_msgs/PointCloud2, x y z float32 in ~edvs_frame, the events with
 //    depth), built only while subscribed;
-//  - static tf ~depth_frame -> ~edvs_frame (the calibration's depth_from_edvs), ~publish_tf.
+//  - static tf ~depth_frame -> ~edvs_frame (the calibration's depth_from_edvs), ~publish_tf;
+//    the inverse, ~edvs_frame -> ~depth_frame, with ~tf_parent = edvs (the eDVS frame hangs off
+//    EventSlam3d's base_link, so the depth camera hangs off the eDVS).
 // Time association: the core takes the depth frame nearest in time within ~max_frame_age
 // (depth stamps minus the calibration's depth_clock_offset_s on the event clock). An EventArray
 // whose last event lies beyond half a frame period after the latest depth frame waits (up to
@@ -118,12 +120,14 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
   }
 
   void publishStaticTf() {
-    const Eigen::Isometry3d& t = config_.sensors.depth_from_edvs;
+    const bool from_edvs = config_.tf_parent == "edvs";
+    const Eigen::Isometry3d t =
+        from_edvs ? config_.sensors.depth_from_edvs.inverse() : config_.sensors.depth_from_edvs;
     const Eigen::Quaterniond q(t.linear());
     geometry_msgs::TransformStamped tf;
     tf.header.stamp = ros::Time::now();
-    tf.header.frame_id = config_.depth_frame;
-    tf.child_frame_id = config_.edvs_frame;
+    tf.header.frame_id = from_edvs ? config_.edvs_frame : config_.depth_frame;
+    tf.child_frame_id = from_edvs ? config_.depth_frame : config_.edvs_frame;
     tf.transform.translation.x = t.translation().x();
     tf.transform.translation.y = t.translation().y();
     tf.transform.translation.z = t.translation().z();

@@ -1,7 +1,8 @@
 // EB-SLAM-2D (thesis 7.2-7.3, alg. 8): an upward-looking eDVS localises itself against a ceiling
 // map it builds from the same events. Pose, path, particles, tf, `reset`, dynamic_reconfigure
 // and diagnostics: PoseFilterNode (pose_filter_node.h). Map outputs (relative names):
-//  - map (nav_msgs/OccupancyGrid, latched, at most every ~map_publish_period): M = O / (Z + Z0)
+//  - map (nav_msgs/OccupancyGrid, latched, at most every ~map_publish_period of wall time, or of
+//    event time with ~map_period_on_stamps): M = O / (Z + Z0)
 //    scaled so that its 99 % quantile is 100; -1 where no event and no observation fell;
 //  - map/image (sensor_msgs/Image mono8, only while subscribed): mapToImage(M), dark = likely
 //    to fire, row r = map y of cell row r (as the grid);
@@ -65,6 +66,7 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
     ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventSlam2d " + getName(), [&] {
       const EventSlam2dNodeConfig config = loadEventSlam2dNodeConfig(getPrivateNodeHandle());
       map_period_ = ros::WallDuration(config.map_publish_period_s);
+      map_period_on_stamps_ = config.map_period_on_stamps;
       map_frame_ = config.node.map_frame;
       const ebslam::CeilingCamera camera(config.node.sensor.camera,
                                          config.node.sensor.ceiling_distance_m);
@@ -82,9 +84,18 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
           },
           getName());
       node_->setAfterUpdate([this](const PoseFilterBackend& backend, const ros::Time& stamp) {
-        const ros::WallTime now = ros::WallTime::now();
-        if (now - last_map_ < map_period_) return;
-        last_map_ = now;
+        if (map_period_on_stamps_) {
+          // A stamp before the last map's (restart after a time jump) starts the period anew.
+          if (!last_map_stamp_.isZero() && stamp >= last_map_stamp_ &&
+              (stamp - last_map_stamp_).toSec() < map_period_.toSec()) {
+            return;
+          }
+          last_map_stamp_ = stamp;
+        } else {
+          const ros::WallTime now = ros::WallTime::now();
+          if (now - last_map_ < map_period_) return;
+          last_map_ = now;
+        }
         publishMap(static_cast<const Backend&>(backend).slam(), stamp);
       });
       save_srv_ = getNodeHandle().advertiseService("save_map", &EventSlam2dNodelet::onSave, this);
@@ -186,6 +197,8 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
   ros::ServiceServer save_srv_;
   ros::WallDuration map_period_{1.0};
   ros::WallTime last_map_;
+  bool map_period_on_stamps_ = false;
+  ros::Time last_map_stamp_;  // with map_period_on_stamps_
   std::string map_frame_;
 };
 

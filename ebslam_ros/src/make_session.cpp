@@ -16,6 +16,8 @@
 // Stamps: the motion capture's own clock (seconds since 1970 in the TUM files).
 //   rosrun ebslam_ros make_session --trajectory test/data/sample_session/pioneer_360_excerpt.txt
 //     --duration 8 --output test/data/session/session.bag
+// With --rig dedvs it writes the hand-held D-eDVS session instead (writeDedvsSession below,
+// test/data/dedvs_session/README.md).
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <rosbag/bag.h>
@@ -45,11 +47,13 @@
 namespace {
 
 struct SessionOptions {
+  std::string rig = "floor";  // floor (upward eDVS + RGB-D camera) | dedvs (hand-held D-eDVS)
   std::string trajectory;
   std::string output;
   double t_begin_s = 0.0;
   double duration_s = 8.0;
   double rgbd_rate_hz = 3.0;
+  double rgb_rate_hz = 0.0;  // dedvs: colour frames kept per second (0: with every depth frame)
   double event_message_rate_hz = 100.0;
   double ground_truth_rate_hz = 50.0;
   int depth_width = 320;
@@ -376,12 +380,139 @@ void writeSession(const SessionOptions& options) {
       depth_camera.height, ground_truth_poses, scene.planes.size());
 }
 
+// The hand-held D-eDVS session (thesis 8.2-8.4): the simulator's rig (eDVS on top of a
+// PrimeSense-like depth camera, dedvs_simulator.h defaults: the calibration of
+// config/dedvs_sensors.yaml) carried along a TUM hand-held path through a furnished room, both
+// exactly as ebslam_experiment_ebslam3d's D-eDVS source simulates them (the path shifted to start
+// at 0 s, makeRoomScene with the table, the scene seed for room, events and depth noise), so that
+// the offline tool sees the same events. Topics as live.launch records them from the real rig:
+// /edvs/events, /edvs/camera_info, /camera/depth_registered/image_raw (every frame, 30 Hz),
+// /camera/depth_registered/camera_info, /camera/rgb/image_rect_color and /camera/rgb/camera_info
+// (--rgb-rate), /ground_truth/pose (the eDVS optical frame in `world`, 100 Hz). No tf: the rig's
+// is the calibration's (the fusion publishes it), the map's is the SLAM's.
+void writeDedvsSession(const SessionOptions& options) {
+  ebslam::Trajectory rig = ebslam::readTumTrajectory(options.trajectory);
+  if (rig.size() < 2) throw std::runtime_error("trajectory has fewer than two poses");
+  const double clock_origin_s = rig.front().t_s;
+  for (ebslam::StampedPose& pose : rig) pose.t_s -= clock_origin_s;
+  ebslam::RoomSceneConfig room;
+  room.seed = options.seed;
+  const ebslam::Scene scene = ebslam::makeRoomScene(rig, room);
+  ebslam::DedvsSimulatorConfig config;
+  config.seed = options.seed;
+  config.events.seed = options.seed;
+  config.depth.camera = config.depth.camera.scaled(options.depth_width / 320.0);
+  const ebslam::DedvsSimulator simulator(config);
+
+  const std::string unordered_path = options.output + ".unordered";
+  rosbag::Bag bag(unordered_path, rosbag::bagmode::Write);
+  ebslam::EventClock clock;
+  clock.anchor(0, ebslam_msgs::toMicroseconds(ros::Time(clock_origin_s)));
+  const ebslam::CameraModel& edvs_camera = config.edvs;
+  const ebslam::PinholeCamera& depth_camera = config.depth.camera;
+  const std::string depth_frame = "camera_rgb_optical_frame";  // registered depth: colour's
+  const std::string edvs_frame = "edvs_optical_frame";
+
+  ebslam::EventVector pending;
+  std::int64_t message_end_us = 0;
+  const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
+  std::size_t event_count = 0, event_messages = 0, depth_frames = 0, colour_frames = 0;
+  auto flush_events = [&]() {
+    if (pending.empty()) return;
+    for (ebslam::Event& e : pending) e.t_us = clock.stamp(e.t_us).value_or(-1);
+    const ebslam_msgs::EventArray msg =
+        ebslam_msgs::toMsg(pending,
+                           ebslam::SensorSize{static_cast<std::uint32_t>(edvs_camera.width),
+                                              static_cast<std::uint32_t>(edvs_camera.height)},
+                           edvs_frame);
+    bag.write("/edvs/events", msg.header.stamp, msg);
+    if (event_messages % 10 == 0) {
+      sensor_msgs::CameraInfo info = cameraInfo(
+          edvs_camera.width, edvs_camera.height, edvs_camera.focal_px, edvs_camera.focal_px,
+          edvs_camera.principal_point.x(), edvs_camera.principal_point.y(), edvs_frame);
+      info.header.stamp = msg.header.stamp;
+      bag.write("/edvs/camera_info", msg.header.stamp, info);
+    }
+    event_count += pending.size();
+    ++event_messages;
+    pending.clear();
+  };
+  const auto on_events = [&](const std::vector<ebslam::TrueDepthEvent>& events) {
+    for (const ebslam::TrueDepthEvent& e : events) {
+      if (message_end_us == 0) message_end_us = e.event.t_us + period_us;
+      while (e.event.t_us >= message_end_us) {
+        flush_events();
+        message_end_us += period_us;
+      }
+      pending.push_back(e.event);
+    }
+  };
+  const double rgb_rate = options.rgb_rate_hz > 0.0 ? options.rgb_rate_hz : 1e9;
+  double next_colour_s = -1.0;
+  const auto on_depth = [&](const ebslam::DepthFrame& frame) {
+    flush_events();  // events before the frame go first, as a live system would receive them
+    std_msgs::Header header;
+    header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
+    header.frame_id = depth_frame;
+    sensor_msgs::CameraInfo info =
+        cameraInfo(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
+                   depth_camera.cx, depth_camera.cy, depth_frame);
+    info.header = header;
+    bag.write("/camera/depth_registered/image_raw", header.stamp,
+              imageMsg(frame.depth_mm, "16UC1", header));
+    bag.write("/camera/depth_registered/camera_info", header.stamp, info);
+    ++depth_frames;
+    if (frame.t_s + 1e-6 >= next_colour_s) {
+      next_colour_s = std::max(next_colour_s, frame.t_s) + 1.0 / rgb_rate;
+      bag.write("/camera/rgb/image_rect_color", header.stamp,
+                imageMsg(frame.colour, "bgr8", header));
+      bag.write("/camera/rgb/camera_info", header.stamp, info);
+      ++colour_frames;
+    }
+  };
+  const double t_end = std::min(rig.back().t_s, options.t_begin_s + options.duration_s);
+  const ebslam::DedvsRun run =
+      simulator.simulate(scene, rig, options.t_begin_s, t_end, on_events, on_depth);
+  flush_events();
+
+  std::size_t ground_truth_poses = 0;
+  double next_t = -1.0;
+  for (const ebslam::StampedPose& pose : run.edvs_ground_truth) {
+    if (pose.t_s < next_t) continue;
+    next_t = pose.t_s + 1.0 / options.ground_truth_rate_hz;
+    geometry_msgs::PoseStamped msg;
+    msg.header.stamp = ros::Time(clock_origin_s + pose.t_s);
+    msg.header.frame_id = "world";
+    const geometry_msgs::Transform t = transformMsg(isometryOf(pose));
+    msg.pose.position.x = t.translation.x;
+    msg.pose.position.y = t.translation.y;
+    msg.pose.position.z = t.translation.z;
+    msg.pose.orientation = t.rotation;
+    bag.write("/ground_truth/pose", msg.header.stamp, msg);
+    ++ground_truth_poses;
+  }
+  bag.close();
+  copyInTimeOrder(unordered_path, options);
+  std::filesystem::remove(unordered_path);
+  std::printf(
+      "D-eDVS session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu depth frames "
+      "and %zu colour frames %dx%d, %zu ground-truth poses, %zu scene planes\n",
+      options.output.c_str(), t_end - options.t_begin_s, event_count, event_messages,
+      event_count / std::max(1e-9, t_end - options.t_begin_s), depth_frames, colour_frames,
+      depth_camera.width, depth_camera.height, ground_truth_poses, scene.planes.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Simulated session bag: floor robot with an upward eDVS and a forward RGB-D camera"};
   SessionOptions options;
-  app.add_option("--trajectory", options.trajectory, "TUM motion capture of a wheeled robot")
+  app.add_option("--rig", options.rig,
+                 "floor: floor robot, upward eDVS + forward RGB-D camera (--trajectory of a "
+                 "wheeled robot); dedvs: the hand-held D-eDVS (--trajectory of the depth camera)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"floor", "dedvs"}));
+  app.add_option("--trajectory", options.trajectory, "TUM motion capture (see --rig)")
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--output", options.output, "bag to write")->required();
@@ -389,6 +520,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--duration", options.duration_s, "simulated time [s]")->capture_default_str();
   app.add_option("--rgbd-rate", options.rgbd_rate_hz, "RGB-D frames per second kept [Hz]")
+      ->capture_default_str();
+  app.add_option("--rgb-rate", options.rgb_rate_hz,
+                 "dedvs: colour frames kept per second [Hz] (0: every depth frame)")
+      ->capture_default_str();
+  app.add_option("--ground-truth-rate", options.ground_truth_rate_hz, "ground-truth poses [Hz]")
       ->capture_default_str();
   app.add_option("--depth-width", options.depth_width, "RGB-D width: 320 or 640")
       ->capture_default_str()
@@ -401,10 +537,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"none", "lz4", "bz2"}));
   CLI11_PARSE(app, argc, argv);
   try {
-    if (options.duration_s <= 0.0 || options.rgbd_rate_hz <= 0.0) {
-      throw std::invalid_argument("--duration and --rgbd-rate must be positive");
+    if (options.duration_s <= 0.0 || options.rgbd_rate_hz <= 0.0 || options.rgb_rate_hz < 0.0 ||
+        options.ground_truth_rate_hz <= 0.0) {
+      throw std::invalid_argument(
+          "--duration, --rgbd-rate and --ground-truth-rate must be positive, --rgb-rate >= 0");
     }
-    writeSession(options);
+    if (options.rig == "dedvs") {
+      writeDedvsSession(options);
+    } else {
+      writeSession(options);
+    }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "make_session: %s\n", error.what());
     return 1;

@@ -3,10 +3,33 @@
 #include <ebslam_msgs/EventArray.h>
 #include <rosgraph_msgs/Clock.h>
 
+#include <ros/master.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
 #include <cmath>
+#include <set>
 #include <utility>
 
 namespace ebslam_ros {
+namespace {
+
+// Topics with at least one subscriber, from the master's system state; empty if unreachable.
+std::set<std::string> subscribedTopics() {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  std::set<std::string> topics;
+  if (!ros::master::execute("getSystemState", args, result, payload, false)) return topics;
+  if (payload.getType() != XmlRpc::XmlRpcValue::TypeArray || payload.size() < 2) return topics;
+  XmlRpc::XmlRpcValue& subscribers = payload[1];
+  for (int i = 0; i < subscribers.size(); ++i) {
+    if (subscribers[i].size() >= 2 && subscribers[i][1].size() > 0) {
+      topics.insert(static_cast<std::string>(subscribers[i][0]));
+    }
+  }
+  return topics;
+}
+
+}  // namespace
 
 PacedEventPublisher::PacedEventPublisher(ros::NodeHandle& nh, PacedEventOptions options,
                                          const std::atomic<bool>& stop,
@@ -19,11 +42,24 @@ PacedEventPublisher::PacedEventPublisher(ros::NodeHandle& nh, PacedEventOptions 
 }
 
 bool PacedEventPublisher::start(std::int64_t begin_us) {
+  const bool waited = options_.wait_for_subscribers || !options_.start_when_subscribed.empty();
   if (options_.wait_for_subscribers) {
-    // roscpp counts a subscriber before its side of the connection is ready.
     while (!stop_ && events_pub_.getNumSubscribers() == 0) ros::WallDuration(0.05).sleep();
-    ros::WallDuration(0.5).sleep();
   }
+  for (bool all = options_.start_when_subscribed.empty(); !stop_ && !all;) {
+    const std::set<std::string> subscribed = subscribedTopics();
+    std::string missing;
+    for (const std::string& topic : options_.start_when_subscribed) {
+      if (subscribed.count(topic) == 0) missing += " " + topic;
+    }
+    all = missing.empty();
+    if (!all) {
+      ROS_INFO_THROTTLE(5.0, "waiting for subscribers to:%s", missing.c_str());
+      ros::WallDuration(0.1).sleep();
+    }
+  }
+  // roscpp and the master count a subscriber before its side of the connection is ready.
+  if (waited) ros::WallDuration(0.5).sleep();
   if (stop_) return false;
   const double stamp_speed = options_.publish_clock ? 1.0 : options_.speed;
   const ros::Time anchor_time =

@@ -11,6 +11,8 @@
 //    the rig (the depth optical frame) in ~map_frame at each event message's end, and the tf
 //    ~map_frame -> ~ground_truth_frame;
 //  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+// With ~loop the rig drives ~t_begin..~t_end forth and back endlessly (odd passes backwards, pass k
+// seeded ~seed + k in the same room), the trajectory clock running on across passes.
 // Time: trajectory time t [s] is stamped anchor + (t - start), the anchor being ~clock_start
 // with /clock, else the wall time at the start (stamps then advance with t / ~speed, as the
 // EventSimulator). Pacing: the message for t is sent at wall_start + (t - start) / ~speed, or as
@@ -33,7 +35,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <memory>
+#include <limits>
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
@@ -105,12 +107,13 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     const PacedEventOptions options = pacedEventOptions(
         config_, config_.edvs_frame, config_.simulator.edvs.width, config_.simulator.edvs.height);
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
-      publishGroundTruth(std::min(t_end_s, t_end_), stamp);
+      publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
     });
-    NODELET_INFO("simulating the D-eDVS along '%s' from %.2f to %.2f s at %.2fx%s (%zu planes)",
+    NODELET_INFO("simulating the D-eDVS along '%s' from %.2f to %.2f s at %.2fx%s%s (%zu planes)",
                  config_.trajectory.c_str(), t_begin_ - path_.front().t_s,
                  t_end_ - path_.front().t_s, config_.speed,
-                 config_.publish_clock ? " with /clock" : "", scene_.planes.size());
+                 config_.publish_clock ? " with /clock" : "",
+                 config_.loop ? ", looping forth and back" : "", scene_.planes.size());
     worker_ = std::thread([this] { run(); });
   }
 
@@ -128,34 +131,67 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
                                   std::to_string(path_.back().t_s - t0) + " s long)");
     }
     scene_ = ebslam::makeRoomScene(path_, config_.room);
-    simulator_ = std::make_unique<ebslam::DedvsSimulator>(config_.simulator);
+    ebslam::DedvsSimulator check(config_.simulator);  // validates the configuration
+    // The path driven backwards over the same span: pose at t' = t_begin + t_end - t.
+    reversed_path_.assign(path_.rbegin(), path_.rend());
+    for (ebslam::StampedPose& pose : reversed_path_) pose.t_s = t_begin_ + t_end_ - pose.t_s;
+    pass_path_ = path_;
+    pass_end_ = t_end_;
     if (!config_.write_calibration.empty()) {
       ebslam::writeDedvsSensors(config_.write_calibration, ebslam::sensorsOf(config_.simulator));
     }
   }
 
+  // The path of pass `pass` (forth, back, forth, ...), shifted to start at its pass's time.
+  ebslam::Trajectory passPath(int pass) const {
+    ebslam::Trajectory path = pass % 2 == 0 ? path_ : reversed_path_;
+    const double offset = pass * (t_end_ - t_begin_);
+    for (ebslam::StampedPose& pose : path) pose.t_s += offset;
+    return path;
+  }
+
   void run() {
     if (!events_->start(std::llround(t_begin_ * 1e6))) return;
     try {
-      const ebslam::DedvsRun result = simulator_->simulate(
-          scene_, path_, t_begin_, t_end_,
-          [&](const std::vector<ebslam::TrueDepthEvent>& events) {
-            if (stop_) throw PacedEventPublisher::Stopped{};
-            for (const ebslam::TrueDepthEvent& e : events) events_->add(e.event);
-          },
-          [&](const ebslam::DepthFrame& frame) {
-            if (stop_) throw PacedEventPublisher::Stopped{};
-            // Events up to the exposure go out first (pacing), then the frame.
-            events_->sendUntil(std::llround(frame.t_s * 1e6));
-            publishFrame(frame);
-          });
+      std::size_t signal = 0, noise = 0;
+      double last_frame_t_s = -std::numeric_limits<double>::infinity();
+      for (int pass = 0;; ++pass) {
+        const double offset = pass * (t_end_ - t_begin_);
+        // The ground-truth callback runs on this thread (events_->add / sendUntil).
+        pass_path_ = passPath(pass);
+        pass_end_ = t_end_ + offset;
+        ebslam::DedvsSimulatorConfig config = config_.simulator;
+        config.seed += static_cast<std::uint64_t>(pass);
+        config.events.seed += static_cast<std::uint64_t>(pass);
+        const ebslam::DedvsRun result = ebslam::DedvsSimulator(config).simulate(
+            scene_, pass_path_, t_begin_ + offset, pass_end_,
+            [&](const std::vector<ebslam::TrueDepthEvent>& events) {
+              if (stop_) throw PacedEventPublisher::Stopped{};
+              for (const ebslam::TrueDepthEvent& e : events) events_->add(e.event);
+            },
+            [&](const ebslam::DepthFrame& frame) {
+              if (stop_) throw PacedEventPublisher::Stopped{};
+              // A pass starts where the previous one ended: a frame at that instant went out.
+              if (frame.t_s <= last_frame_t_s) return;
+              last_frame_t_s = frame.t_s;
+              // Events up to the exposure go out first (pacing), then the frame.
+              events_->sendUntil(std::llround(frame.t_s * 1e6));
+              publishFrame(frame);
+            });
+        signal += result.signal_events;
+        noise += result.noise_events;
+        if (!config_.loop) break;
+        if (pass % 10 == 9) {
+          NODELET_INFO("simulated %d passes: %zu events in %u messages, %u depth frames", pass + 1,
+                       signal + noise, events_->messages(), frames_);
+        }
+      }
       // The last message ends at ~t_end (a depth frame there may have sent it already).
-      events_->finish(std::llround(t_end_ * 1e6));
+      events_->finish(std::llround(pass_end_ * 1e6));
       NODELET_INFO(
           "simulation done: %zu events (%zu signal, %zu noise) in %u messages, %u depth "
           "frames",
-          result.signal_events + result.noise_events, result.signal_events, result.noise_events,
-          events_->messages(), frames_);
+          signal + noise, signal, noise, events_->messages(), frames_);
     } catch (const PacedEventPublisher::Stopped&) {
     } catch (const std::exception& error) {
       NODELET_ERROR("simulation failed: %s", error.what());
@@ -178,15 +214,17 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void publishGroundTruth(double t_s, const ros::Time& stamp) {
-    ground_truth_->publish(ebslam::interpolatePose(path_, t_s), stamp,
+    ground_truth_->publish(ebslam::interpolatePose(pass_path_, t_s), stamp,
                            events_->messages() % 10 == 0);
   }
 
   RgbdEventSimulatorNodeConfig config_;
   ebslam::Trajectory path_;  // rig (depth optical frame) -> world, trajectory clock [s]
   ebslam::Scene scene_;
-  std::unique_ptr<ebslam::DedvsSimulator> simulator_;
+  ebslam::Trajectory reversed_path_;    // path_ driven backwards over [t_begin_, t_end_]
+  ebslam::Trajectory pass_path_;        // the path of the pass being simulated
   double t_begin_ = 0.0, t_end_ = 0.0;  // trajectory clock [s]
+  double pass_end_ = 0.0;               // end of the pass being simulated [s, trajectory clock]
   std::uint32_t frames_ = 0;
   ros::Publisher depth_pub_, depth_info_pub_, colour_pub_, colour_info_pub_;
   std::optional<PacedEventPublisher> events_;

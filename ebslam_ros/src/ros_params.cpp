@@ -3,6 +3,7 @@
 #include "ebslam_ros/flat_yaml.h"
 
 #include <ebslam_msgs/ros_param_helpers.h>
+#include <ros/names.h>
 
 #include <ebslam/dedvs_io.h>
 
@@ -195,6 +196,8 @@ EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   config.map_publish_period_s =
       param<double>(nh, "map_publish_period", config.map_publish_period_s);
   requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  config.map_period_on_stamps =
+      param<bool>(nh, "map_period_on_stamps", config.map_period_on_stamps);
   return config;
 }
 
@@ -211,6 +214,11 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
       param<double>(nh, "sigma_position_time", c.sigma_position_per_sqrt_s);
   c.sigma_rotation_per_sqrt_s =
       param<double>(nh, "sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+  c.diffusion_min_scale = param<double>(nh, "diffusion_min_scale", c.diffusion_min_scale);
+  c.diffusion_max_scale = param<double>(nh, "diffusion_max_scale", c.diffusion_max_scale);
+  c.reference_angular_speed =
+      param<double>(nh, "reference_angular_speed", c.reference_angular_speed);
+  c.reference_linear_speed = param<double>(nh, "reference_linear_speed", c.reference_linear_speed);
   c.max_event_rate = param<double>(nh, "max_event_rate", c.max_event_rate);
   c.score_alpha = param<double>(nh, "score_alpha", c.score_alpha);
   c.voxel_size_m = param<double>(nh, "voxel_size", c.voxel_size_m);
@@ -420,6 +428,26 @@ class ScenarioParams {
 
 }  // namespace
 
+namespace {
+
+// ~start_when_subscribed: space-separated topic names, relative ones resolved in the node's
+// namespace (the parent of its private one).
+std::vector<std::string> topicList(const ros::NodeHandle& nh, const std::string& name) {
+  std::istringstream words(param<std::string>(nh, name, ""));
+  const std::string node_namespace = ros::names::parentNamespace(nh.getNamespace());
+  std::vector<std::string> topics;
+  for (std::string topic; words >> topic;) {
+    try {
+      topics.push_back(ros::names::resolve(node_namespace, topic, false));
+    } catch (const ros::InvalidNameException& error) {
+      fail(nh, name, "'" + topic + "' is not a valid topic name (" + error.what() + ")");
+    }
+  }
+  return topics;
+}
+
+}  // namespace
+
 EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
                                                       const std::string& default_scenario) {
   EventSimulatorNodeConfig c;
@@ -450,6 +478,7 @@ EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& nh,
   c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.start_when_subscribed = topicList(nh, "start_when_subscribed");
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);
   c.ground_truth_frame = param<std::string>(nh, "ground_truth_frame", c.ground_truth_frame);
@@ -560,6 +589,10 @@ DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle&
   requireFrame(nh, "depth_frame", c.depth_frame);
   if (c.edvs_frame == c.depth_frame) fail(nh, "edvs_frame", "must differ from ~depth_frame");
   c.publish_tf = param<bool>(nh, "publish_tf", c.publish_tf);
+  c.tf_parent = param<std::string>(nh, "tf_parent", c.tf_parent);
+  if (c.tf_parent != "depth" && c.tf_parent != "edvs") {
+    fail(nh, "tf_parent", "must be 'depth' or 'edvs'");
+  }
   c.max_wait_s = param<double>(nh, "max_wait", c.max_wait_s);
   if (!std::isfinite(c.max_wait_s) || c.max_wait_s < 0.0 || c.max_wait_s > 10.0) {
     fail(nh, "max_wait", "must be a number of seconds in [0, 10]");
@@ -582,10 +615,12 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   requirePositive(c.speed, nh, "speed");
   c.publish_rate_hz = param<double>(nh, "publish_rate", c.publish_rate_hz);
   requirePositive(c.publish_rate_hz, nh, "publish_rate");
+  c.loop = param<bool>(nh, "loop", c.loop);
   c.publish_clock = param<bool>(nh, "publish_clock", c.publish_clock);
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.start_when_subscribed = topicList(nh, "start_when_subscribed");
   const int seed = param<int>(nh, "seed", static_cast<int>(c.simulator.seed));
   if (seed < 0) fail(nh, "seed", "must not be negative");
   c.simulator.seed = c.simulator.events.seed = c.room.seed = static_cast<std::uint64_t>(seed);
@@ -707,6 +742,10 @@ ClosedLoopSimulatorNodeConfig loadClosedLoopSimulatorNodeConfig(
   c.clock_start_s = param<double>(nh, "clock_start", c.clock_start_s);
   requirePositive(c.clock_start_s, nh, "clock_start");
   c.wait_for_subscribers = param<bool>(nh, "wait_for_subscribers", c.wait_for_subscribers);
+  c.lockstep = param<bool>(nh, "lockstep", c.lockstep);
+  if (c.lockstep && !c.publish_clock) fail(nh, "lockstep", "needs publish_clock");
+  c.lockstep_timeout_s = param<double>(nh, "lockstep_timeout", c.lockstep_timeout_s);
+  requirePositive(c.lockstep_timeout_s, nh, "lockstep_timeout");
   c.frame_id = param<std::string>(nh, "frame_id", c.frame_id);
   c.base_frame = param<std::string>(nh, "base_frame", c.base_frame);
   c.map_frame = param<std::string>(nh, "map_frame", c.map_frame);

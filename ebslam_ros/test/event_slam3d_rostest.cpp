@@ -283,6 +283,10 @@ TEST_F(EventSlam3dTest, TracksThePathWithEventStampsFramesAndLazyOutputs) {
     c.sigma_rotation_rad = slam_nh.param("sigma_rotation", c.sigma_rotation_rad);
     c.sigma_position_per_sqrt_s = slam_nh.param("sigma_position_time", c.sigma_position_per_sqrt_s);
     c.sigma_rotation_per_sqrt_s = slam_nh.param("sigma_rotation_time", c.sigma_rotation_per_sqrt_s);
+    c.diffusion_min_scale = slam_nh.param("diffusion_min_scale", c.diffusion_min_scale);
+    c.diffusion_max_scale = slam_nh.param("diffusion_max_scale", c.diffusion_max_scale);
+    c.reference_angular_speed = slam_nh.param("reference_angular_speed", c.reference_angular_speed);
+    c.reference_linear_speed = slam_nh.param("reference_linear_speed", c.reference_linear_speed);
     c.max_event_rate = slam_nh.param("max_event_rate", c.max_event_rate);
     c.score_alpha = slam_nh.param("score_alpha", c.score_alpha);
     c.voxel_size_m = slam_nh.param("voxel_size", c.voxel_size_m);

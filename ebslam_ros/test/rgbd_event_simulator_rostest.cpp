@@ -1,7 +1,8 @@
 // rostest of the RgbdEventSimulator nodelet (rgbd_event_simulator.test): one simulated second on
 // /clock from 500 s: events in the eDVS frame, depth and colour with camera_info in the depth
 // frame stamped on the depth camera's clock (exposure + 12 ms) at 30 Hz, ground truth in map,
-// and DepthEventFusion (loaded here) giving most events a depth in the room.
+// and DepthEventFusion (loaded here) giving most events a depth in the room. A second simulator
+// (loaded here) with ~loop drives 0.3 s forth and back with its time running on.
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_msgs/EventArray.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -17,6 +18,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "rostest_util.h"
@@ -144,6 +147,93 @@ TEST(RgbdEventSimulator, PublishesEventsDepthColourGroundTruthAndClock) {
       "events_with_depth_percent",
       static_cast<int>(100.0 * with_depth / std::max<std::size_t>(total, 1)));
   EXPECT_GT(with_depth, total / 3) << with_depth << " of " << total << " events with depth";
+}
+
+double distance(const geometry_msgs::PoseStamped& a, const geometry_msgs::PoseStamped& b) {
+  return std::hypot(a.pose.position.x - b.pose.position.x, a.pose.position.y - b.pose.position.y);
+}
+
+TEST(RgbdEventSimulator, LoopDrivesTheSpanForthAndBackWithTimeRunningOn) {
+  ros::NodeHandle nh;
+  std::vector<ebslam_msgs::EventArray> arrays;
+  std::vector<sensor_msgs::Image> depth;
+  std::vector<geometry_msgs::PoseStamped> poses;
+  auto pose_sub = nh.subscribe<geometry_msgs::PoseStamped>(
+      "/looping/ground_truth/pose", 1000,
+      [&](const geometry_msgs::PoseStamped::ConstPtr& m) { poses.push_back(*m); });
+  auto depth_sub = nh.subscribe<sensor_msgs::Image>(
+      "/looping/depth_registered/image_raw", 1000,
+      [&](const sensor_msgs::Image::ConstPtr& m) { depth.push_back(*m); });
+  auto events_sub = nh.subscribe<ebslam_msgs::EventArray>(
+      "/looping/events", 1000,
+      [&](const ebslam_msgs::EventArray::ConstPtr& m) { arrays.push_back(*m); });
+  ros::NodeHandle looping("/looping");
+  looping.setParam("t_end", 0.3);
+  looping.setParam("loop", true);
+  looping.setParam("seed", 2);
+  looping.setParam("depth_width", 320);
+  looping.setParam("wait_for_subscribers", true);
+  // Stamps from 700 s (the first test's simulator is done with /clock; this process runs on wall
+  // time either way).
+  looping.setParam("publish_clock", true);
+  looping.setParam("clock_start", 700.0);
+  nodelet::Loader loader(false);
+  const std::vector<std::string> topics = {"events",
+                                           "depth_registered/image_raw",
+                                           "depth_registered/camera_info",
+                                           "rgb/image_rect_color",
+                                           "rgb/camera_info",
+                                           "ground_truth/pose",
+                                           "ground_truth/path"};
+  nodelet::M_string remappings;
+  for (const std::string& topic : topics) remappings["/" + topic] = "/looping/" + topic;
+  ASSERT_TRUE(loader.load("/looping", "ebslam_ros/RgbdEventSimulator", remappings, {}));
+  // Three and a half passes: 1.05 simulated s from 700 s.
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(120.0);
+  while (ros::WallTime::now() < end &&
+         (poses.empty() || poses.back().header.stamp < ros::Time(701.05))) {
+    ros::spinOnce();
+    ros::WallDuration(0.01).sleep();
+  }
+  loader.clear();
+  ASSERT_FALSE(poses.empty());
+  ASSERT_GE(poses.back().header.stamp, ros::Time(701.05)) << "the simulation stopped";
+  ros::Time previous(0);
+  std::size_t events = 0;
+  for (const auto& a : arrays) {
+    for (const auto& e : a.events) {
+      ASSERT_GE(e.ts, previous) << "event time went back";
+      previous = e.ts;
+    }
+    events += a.events.size();
+  }
+  EXPECT_GT(events, 1000u);
+  // Depth frames at 30 Hz go on across the passes, their stamps increasing.
+  ASSERT_GE(depth.size(), 25u);
+  for (std::size_t i = 1; i < depth.size(); ++i) {
+    ASSERT_GT(depth[i].header.stamp, depth[i - 1].header.stamp);
+  }
+  EXPECT_GT((depth.back().header.stamp - depth.front().header.stamp).toSec(), 0.8);
+  // Ground truth every 10 ms: continuous, and at 0.3 + d s (pass 1, backwards) where it was at
+  // 0.3 - d s (pass 0).
+  std::map<long, geometry_msgs::PoseStamped> by_ms;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LT(distance(poses[i], poses[i - 1]), 0.02) << "jump at " << poses[i].header.stamp;
+    }
+    by_ms[std::lround((poses[i].header.stamp.toSec() - 700.0) * 1000.0)] = poses[i];
+  }
+  int mirrored = 0;
+  for (long d = 50; d <= 250; d += 50) {
+    const auto forth = by_ms.find(300 - d), back = by_ms.find(300 + d);
+    if (forth == by_ms.end() || back == by_ms.end()) continue;
+    EXPECT_LT(distance(forth->second, back->second), 1e-6) << "d = " << d << " ms";
+    ++mirrored;
+  }
+  EXPECT_GE(mirrored, 4);
+  // The rig moved in the span (so the mirror test means something).
+  ASSERT_TRUE(by_ms.count(10) && by_ms.count(300));
+  EXPECT_GT(distance(by_ms[10], by_ms[300]), 0.01);
 }
 
 }  // namespace

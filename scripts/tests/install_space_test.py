@@ -33,6 +33,12 @@ CASES = [
      ["/ebslam/pose", "/camera/superpixels", "/edvs/event_image"]),
     ("demo_playback", "ebslam_ros", "demo_playback.launch", ["output_dir:=$(tmp)"],
      ["/ebslam/pose", "/camera/segmentation"]),
+    ("playback_ebslam3d", "ebslam_ros", "playback.launch",
+     ["bag:=$(find ebslam_ros)/data/dedvs_session/dedvs_session.bag", "loop:=true", "slam:=ebslam3d",
+      "segmentation:=none"],
+     ["/ebslam3d/pose", "/dedvs/depth_events", "/edvs/event_image"]),
+    ("demo_playback3d", "ebslam_ros", "demo_playback3d.launch", ["output_dir:=$(tmp)"],
+     ["/ebslam3d/pose", "/dedvs/depth_events"]),
     ("simulation", "ebslam_ros", "simulation.launch", ["speed:=2"],
      ["/ebslam/pose", "/ground_truth/pose", "/edvs/events"]),
     ("exploration", "ebslam_ros", "exploration.launch", ["speed:=2"],
@@ -54,7 +60,10 @@ CASES = [
     ("edvs", "edvs_driver", "edvs.launch", ["uri:=$(emulator)"], ["/edvs/events", "/edvs/camera_info"]),
 ]
 RESOLVE_ONLY = [("multi_machine", "ebslam_ros", "multi_machine.launch",
-                 ["robot_address:=localhost", "robot_user:=robot", "robot_env_loader:=/bin/true"])]
+                 ["robot_address:=localhost", "robot_user:=robot", "robot_env_loader:=/bin/true"]),
+                ("multi_machine_ebslam3d", "ebslam_ros", "multi_machine.launch",
+                 ["robot_address:=localhost", "robot_user:=robot", "robot_env_loader:=/bin/true",
+                  "slam:=ebslam3d"])]
 
 
 def free_port():

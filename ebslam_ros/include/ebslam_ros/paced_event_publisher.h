@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace ebslam_ros {
 
@@ -24,8 +25,11 @@ struct PacedEventOptions {
   bool publish_clock = false;         ///< publish /clock (then stamps start at clock_start_s)
   double clock_start_s = 0.0;         ///< ROS time of the first event with publish_clock [s]
   bool wait_for_subscribers = false;  ///< start only once `events` has a subscriber
-  std::string frame_id;               ///< frame of the event messages
-  ebslam::SensorSize sensor{};        ///< sensor size of the event messages
+  /// Start only once each of these topics (resolved names) has a subscriber on the master, e.g.
+  /// the SLAM's input behind a filter, so that its first event is the stream's first.
+  std::vector<std::string> start_when_subscribed;
+  std::string frame_id;         ///< frame of the event messages
+  ebslam::SensorSize sensor{};  ///< sensor size of the event messages
 };
 
 /// The pacing options of a simulator node config (EventSimulatorNodeConfig,
@@ -39,6 +43,7 @@ PacedEventOptions pacedEventOptions(const SimulatorNodeConfig& config, const std
   options.publish_clock = config.publish_clock;
   options.clock_start_s = config.clock_start_s;
   options.wait_for_subscribers = config.wait_for_subscribers;
+  options.start_when_subscribed = config.start_when_subscribed;
   options.frame_id = frame_id;
   options.sensor = {static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)};
   return options;
@@ -55,7 +60,7 @@ class PacedEventPublisher {
   PacedEventPublisher(ros::NodeHandle& nh, PacedEventOptions options, const std::atomic<bool>& stop,
                       MessageEndCallback on_message_end);
 
-  /// Waits for a subscriber when asked, then anchors stream time `begin_us` at the clocks' start.
+  /// Waits for the subscribers asked for, then anchors stream time `begin_us` at the clocks' start.
   /// False if stopped while waiting.
   bool start(std::int64_t begin_us);
   /// Queues an event; sends first every message that ends at or before its time.

@@ -103,6 +103,9 @@ struct EventSlam2dNodeConfig {
   /// ~normalisation_step, ~normalisation_prior
   ebslam::Ebslam2dConfig slam;
   double map_publish_period_s = 1.0;  ///< ~map_publish_period: `map` at most this often [s]
+  /// ~map_period_on_stamps: count ~map_publish_period in event time (the stamps) instead of
+  /// wall time: maps at the same points of the data at any pace (exploration in lockstep).
+  bool map_period_on_stamps = false;
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
 
@@ -194,6 +197,9 @@ struct EventSimulatorNodeConfig {
   bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
   double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the run's start with /clock [s]
   bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  /// ~start_when_subscribed: topics (space-separated, relative ones resolved in the node's
+  /// namespace) that must each have a subscriber before the start, e.g. the SLAM's input; "" = none
+  std::vector<std::string> start_when_subscribed;
   std::string frame_id = "edvs_optical_frame";      ///< ~frame_id
   std::string map_frame = "map";                    ///< ~map_frame
   std::string ground_truth_frame = "ground_truth";  ///< ~ground_truth_frame
@@ -223,7 +229,10 @@ struct DepthEventFusionNodeConfig {
                                      ///< `camera_info` (kappas stay the calibration's)
   std::string edvs_frame = "edvs_optical_frame";           ///< ~edvs_frame
   std::string depth_frame = "camera_depth_optical_frame";  ///< ~depth_frame
-  bool publish_tf = true;  ///< ~publish_tf: static tf ~depth_frame -> ~edvs_frame
+  bool publish_tf = true;  ///< ~publish_tf: static tf of the calibration's depth_from_edvs
+  /// ~tf_parent: "depth" (~depth_frame -> ~edvs_frame) or "edvs" (~edvs_frame -> ~depth_frame,
+  /// when the eDVS frame has a parent already, e.g. EventSlam3d's base_link)
+  std::string tf_parent = "depth";
   /// ~max_wait: longest wall time an EventArray newer than the latest depth frame waits for the
   /// next (nearer) frame [s]
   double max_wait_s = 0.2;
@@ -244,6 +253,12 @@ struct RgbdEventSimulatorNodeConfig {
   bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
   double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the run's start with /clock [s]
   bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  /// ~start_when_subscribed: topics (space-separated, relative ones resolved in the node's
+  /// namespace) that must each have a subscriber before the start, e.g. the SLAM's input; "" = none
+  std::vector<std::string> start_when_subscribed;
+  /// ~loop: drive ~t_begin..~t_end forth and back endlessly (pass k backwards when k is odd, event
+  /// and depth-noise seeds ~seed + k, the same room), the time running on; false: one pass.
+  bool loop = false;
   /// ~seed (events, depth noise), ~depth_width (320 or 640), ~noise_rate [Hz per pixel],
   /// ~depth_rate [Hz], ~depth_clock_offset [s]; the rest the core's defaults
   ebslam::DedvsSimulatorConfig simulator;
@@ -291,6 +306,11 @@ struct ClosedLoopSimulatorNodeConfig {
   bool publish_clock = false;         ///< ~publish_clock: publish /clock (use_sim_time)
   double clock_start_s = 1000.0;      ///< ~clock_start: ROS time of the start with /clock [s]
   bool wait_for_subscribers = false;  ///< ~wait_for_subscribers: start on the first subscriber
+  /// ~lockstep (needs ~publish_clock): each step waits for the localisation's pose of its events
+  /// and the controller's cmd_vel on its clock tick (the offline tool's loop; file comment of
+  /// closed_loop_simulator_nodelet.cpp).
+  bool lockstep = false;
+  double lockstep_timeout_s = 2.0;  ///< ~lockstep_timeout: longest wait of a step [s, wall]
   std::string frame_id = "edvs_optical_frame";      ///< ~frame_id: the events' frame
   std::string base_frame = "base_link";             ///< ~base_frame: the bump readings' frame
   std::string map_frame = "map";                    ///< ~map_frame: origin at the start pose

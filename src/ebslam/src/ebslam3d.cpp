@@ -41,6 +41,8 @@ Ebslam3dConfig Ebslam3dConfig::thesis() {
   c.sigma_rotation_rad = 1e-3;
   c.sigma_position_per_sqrt_s = 0.0;
   c.sigma_rotation_per_sqrt_s = 0.0;
+  c.diffusion_min_scale = 1.0;
+  c.diffusion_max_scale = 1.0;
   return c;
 }
 
@@ -70,6 +72,16 @@ void Ebslam3dConfig::validate() const {
     fail("sigma_rotation_per_sqrt_s must be in [0, 10)");
   }
   if (!positive(max_diffusion_dt_s)) fail("max_diffusion_dt_s must be positive");
+  if (!(diffusion_min_scale >= 0.0 && diffusion_min_scale <= diffusion_max_scale &&
+        std::isfinite(diffusion_max_scale) && diffusion_max_scale <= 100.0)) {
+    fail("need 0 <= diffusion_min_scale <= diffusion_max_scale <= 100");
+  }
+  if (!positive(reference_angular_speed) || !positive(reference_linear_speed)) {
+    fail("reference_angular_speed and reference_linear_speed must be positive");
+  }
+  if (!positive(motion_window_s) || !positive(motion_time_s)) {
+    fail("motion_window_s and motion_time_s must be positive");
+  }
   if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
       !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
       !std::isfinite(health.warmup_s)) {
@@ -354,6 +366,9 @@ void EventSlam3d::reset(const Pose3& start) {
   share_accumulator_ = 0.0;
   since_resample_ = 0;
   have_prev_batch_ = false;
+  motion_ref_set_ = false;
+  angular_speed_ = config_.reference_angular_speed;
+  linear_speed_ = config_.reference_linear_speed;
   rate_window_open_ = false;
   rate_window_count_ = 0;
   rate_share_ = 1.0;
@@ -449,16 +464,19 @@ void EventSlam3d::runBatch(int b) {
   }
   prev_batch_end_us_ = batch_end_us_;
   have_prev_batch_ = true;
-  const double var_p = b * config_.sigma_position_m * config_.sigma_position_m +
-                       dt_s * config_.sigma_position_per_sqrt_s * config_.sigma_position_per_sqrt_s;
-  const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad +
-                       dt_s * config_.sigma_rotation_per_sqrt_s * config_.sigma_rotation_per_sqrt_s;
+  const double scale_p = diffusionScale(linear_speed_, config_.reference_linear_speed);
+  const double scale_r = diffusionScale(angular_speed_, config_.reference_angular_speed);
+  const double sp = scale_p * config_.sigma_position_per_sqrt_s;
+  const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
+  const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
+  const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
   const float best = particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
                                      static_cast<float>(std::sqrt(var_r)), batch_decay_[b - 1]);
   updateHealth(best, b, dt_s);
   processed_ += static_cast<std::uint64_t>(b);
   since_resample_ += b;
   expected_ = particles_.weightedMean();
+  updateMotion();
   // Mapping (eq. 8.9).
   if (config_.splat == MapSplat3d::kExpectedPose) {
     const Eigen::Quaternionf q = expected_.orientation.cast<float>();
@@ -478,6 +496,34 @@ void EventSlam3d::runBatch(int b) {
     particles_.resampleSystematic();
     since_resample_ -= config_.resample_every;
   }
+}
+
+double EventSlam3d::diffusionScale(double speed, double reference) const {
+  return std::min(config_.diffusion_max_scale,
+                  std::max(config_.diffusion_min_scale, speed / reference));
+}
+
+void EventSlam3d::updateMotion() {
+  // Speeds from the estimate's change over whole windows (not per batch: over a batch of a few
+  // events the change is dominated by the weighted mean's jitter).
+  if (!motion_ref_set_) {
+    motion_ref_set_ = true;
+    motion_ref_pose_ = expected_;
+    motion_ref_us_ = batch_end_us_;
+    return;
+  }
+  const double span_s = 1e-6 * static_cast<double>(batch_end_us_ - motion_ref_us_);
+  if (span_s < config_.motion_window_s) return;
+  const double angle = expected_.orientation.angularDistance(motion_ref_pose_.orientation);
+  const double distance = (expected_.position - motion_ref_pose_.position).norm();
+  // A gap longer than a few windows (no events) says nothing about the speed within it.
+  const double used_s = std::max(span_s, config_.motion_window_s);
+  const double gain =
+      1.0 - std::exp(-std::min(span_s, 4.0 * config_.motion_window_s) / config_.motion_time_s);
+  angular_speed_ += gain * (angle / used_s - angular_speed_);
+  linear_speed_ += gain * (distance / used_s - linear_speed_);
+  motion_ref_pose_ = expected_;
+  motion_ref_us_ = batch_end_us_;
 }
 
 void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {

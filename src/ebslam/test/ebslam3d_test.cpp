@@ -254,6 +254,7 @@ TEST(EventSlam3d, DiffusionPerTimeDoesNotDependOnTheEventRate) {
     c.sigma_rotation_rad = 0.0;
     c.sigma_position_per_sqrt_s = 0.05;
     c.sigma_rotation_per_sqrt_s = 0.02;
+    c.diffusion_min_scale = 1.0;  // fixed sigmas
     c.max_event_rate = 0.0;
     EventSlam3d slam(c);
     PointEventVector events(static_cast<std::size_t>(count) + 1);
@@ -273,6 +274,52 @@ TEST(EventSlam3d, DiffusionPerTimeDoesNotDependOnTheEventRate) {
     EXPECT_NEAR(var_y / n, 0.05 * 0.05, 0.1 * 0.05 * 0.05) << count << " events";
     EXPECT_NEAR(angle2 / n, 0.02 * 0.02, 0.1 * 0.02 * 0.02) << count << " events";
   }
+}
+
+// Speed-scaled diffusion: a sensor at rest (every event the same point) drives the measured
+// speeds towards 0, so the per-time diffusion shrinks to diffusion_min_scale of its sigma after
+// the first windows; without the scale (min = max = 1) the spread after 1 s is sigma^2.
+TEST(EventSlam3d, DiffusionShrinksWithTheEstimatesSpeed) {
+  const auto spread = [](double min_scale, double* angular_speed) {
+    Ebslam3dConfig c;
+    c.num_particles = 4000;
+    c.batch_size = 1;
+    c.resample_every = 100000000;
+    c.sigma_position_per_sqrt_s = 0.05;
+    c.sigma_rotation_per_sqrt_s = 0.02;
+    c.max_event_rate = 0.0;
+    c.diffusion_min_scale = min_scale;
+    c.diffusion_max_scale = 1.0;
+    EventSlam3d slam(c);
+    PointEventVector events(2501);  // 1 s
+    for (int k = 0; k <= 2500; ++k) {
+      events[k].t_us = static_cast<std::int64_t>(400 * k);
+      events[k].point = Eigen::Vector3f(0.1f, -0.2f, 1.5f);
+    }
+    slam.process(events);
+    double var_y = 0.0;
+    for (int i = 0; i < c.num_particles; ++i) {
+      const double y = slam.particles().particle(i).position.y();
+      var_y += y * y;
+    }
+    *angular_speed = slam.angularSpeed();
+    return var_y / c.num_particles;
+  };
+  double fixed_speed = 0.0, scaled_speed = 0.0;
+  const double fixed = spread(1.0, &fixed_speed);
+  const double scaled = spread(0.1, &scaled_speed);
+  EXPECT_NEAR(fixed, 0.05 * 0.05, 0.1 * 0.05 * 0.05);
+  // Scale 1 for the first 0.25 s window, then decaying towards 0.1 (smoothing 0.25 s): about a
+  // third of the variance, and well above the floor's 0.01.
+  EXPECT_LT(scaled, 0.5 * fixed);
+  EXPECT_GT(scaled, 0.2 * fixed);
+  EXPECT_LT(scaled_speed, 0.1);  // [rad/s]: the weighted mean of 4000 walks barely moves
+  Ebslam3dConfig bad;
+  bad.diffusion_min_scale = 2.0;  // above the max
+  EXPECT_THROW(EventSlam3d{bad}, std::invalid_argument);
+  bad = Ebslam3dConfig{};
+  bad.reference_angular_speed = 0.0;
+  EXPECT_THROW(EventSlam3d{bad}, std::invalid_argument);
 }
 
 // The rate bound keeps about max_event_rate events per second, spread over the whole stream.

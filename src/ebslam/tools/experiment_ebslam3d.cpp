@@ -275,7 +275,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"map_chunks\": %zu, "
       "\"evicted_chunks\": %llu, \"max_event_rate\": %g, \"sigma_position_per_sqrt_s\": %g, "
       "\"sigma_rotation_per_sqrt_s\": %g, \"lost_count\": %llu, \"time_lost_s\": %.3f, "
-      "\"final_state\": \"%s\"}\n",
+      "\"final_state\": \"%s\", \"diffusion_min_scale\": %g, \"diffusion_max_scale\": %g, "
+      "\"reference_angular_speed\": %g, \"reference_linear_speed\": %g}\n",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -287,7 +288,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       slam.map().chunkCount(), static_cast<unsigned long long>(slam.map().evictedChunks()),
       config.max_event_rate, config.sigma_position_per_sqrt_s, config.sigma_rotation_per_sqrt_s,
       static_cast<unsigned long long>(slam.health().lost_count), slam.health().time_lost_s,
-      ebslam::toString(slam.health().state));
+      ebslam::toString(slam.health().state), config.diffusion_min_scale, config.diffusion_max_scale,
+      config.reference_angular_speed, config.reference_linear_speed);
 }
 
 }  // namespace
@@ -340,6 +342,14 @@ int main(int argc, char** argv) {
                                  "diffusion [m / sqrt(s) of event time]");
   auto* srt_opt = app.add_option("--sigma-rotation-time", config.sigma_rotation_per_sqrt_s,
                                  "diffusion [rad / sqrt(s) of event time]");
+  auto* dmin_opt = app.add_option("--diffusion-min-scale", config.diffusion_min_scale,
+                                  "lower bound of the speed scale of the per-time diffusion");
+  auto* dmax_opt = app.add_option("--diffusion-max-scale", config.diffusion_max_scale,
+                                  "upper bound of the speed scale of the per-time diffusion");
+  auto* wref_opt = app.add_option("--reference-angular-speed", config.reference_angular_speed,
+                                  "angular speed of diffusion scale 1 [rad/s]");
+  auto* vref_opt = app.add_option("--reference-linear-speed", config.reference_linear_speed,
+                                  "linear speed of diffusion scale 1 [m/s]");
   app.add_option("--diagnostics", diagnostics_out,
                  "CSV per recorded estimate: tracking state, ESS, fit, error before alignment");
   app.add_option("--events-cache", events_cache,
@@ -380,6 +390,10 @@ int main(int argc, char** argv) {
     if (rate_opt->count()) config.max_event_rate = given.max_event_rate;
     if (spt_opt->count()) config.sigma_position_per_sqrt_s = given.sigma_position_per_sqrt_s;
     if (srt_opt->count()) config.sigma_rotation_per_sqrt_s = given.sigma_rotation_per_sqrt_s;
+    if (dmin_opt->count()) config.diffusion_min_scale = given.diffusion_min_scale;
+    if (dmax_opt->count()) config.diffusion_max_scale = given.diffusion_max_scale;
+    if (wref_opt->count()) config.reference_angular_speed = given.reference_angular_speed;
+    if (vref_opt->count()) config.reference_linear_speed = given.reference_linear_speed;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
     Trajectory truth;

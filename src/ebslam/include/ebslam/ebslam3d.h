@@ -96,6 +96,18 @@ struct Ebslam3dConfig {
   double sigma_position_per_sqrt_s = 0.1;
   double sigma_rotation_per_sqrt_s = 0.3;
   double max_diffusion_dt_s = 0.1;  ///< [s]
+  /// Diffusion scaled by the recent motion: the per-time sigmas are multiplied by
+  /// clamp(speed / reference speed, diffusion_min_scale, diffusion_max_scale), the speed being
+  /// the estimate's angular [rad/s] (rotation) or linear [m/s] (position) speed, measured over
+  /// windows of motion_window_s of event time and smoothed over motion_time_s. Why: a slow
+  /// sensor needs less random walk (it lets the pose wander where nothing pulls it back), a fast
+  /// turn more. min = max = 1 keeps the fixed sigmas. Why: docs/ebslam_core.md#eb-slam-3d-speed
+  double diffusion_min_scale = 0.1;
+  double diffusion_max_scale = 1.0;
+  double reference_angular_speed = 0.5;  ///< [rad/s] speed at which the scale is 1
+  double reference_linear_speed = 0.3;   ///< [m/s] speed at which the scale is 1
+  double motion_window_s = 0.25;         ///< [s of event time]
+  double motion_time_s = 0.25;           ///< [s of event time] smoothing of the speeds
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
   double voxel_size_m = 0.02;  ///< occurrence-map voxel edge [m] (thesis: 1 cm)
@@ -111,12 +123,13 @@ struct Ebslam3dConfig {
   std::uint64_t seed = 1;  ///< seeds the diffusion noise and the resampling
 
   /// This project's default preset: N 100, B 3, K 10, 2 cm voxels, at most 60k events/s, diffusion
-  /// per time (docs/results/ebslam3d.md: chosen on the tuning half of its runs).
+  /// per time scaled by the speed within [0.1, 1] (docs/results/ebslam3d.md: chosen on the tuning
+  /// half of its runs).
   static Ebslam3dConfig defaults() { return {}; }
   /// The fast preset: N 50, B 10, at most 40k events/s, otherwise as defaults().
   static Ebslam3dConfig fast();
   /// The thesis' "default" set (8.4): N 100, K 100, B 3, all events, 1 cm voxels, per-event
-  /// diffusion 1e-3 m and 1e-3 rad, no rate bound.
+  /// diffusion 1e-3 m and 1e-3 rad, no rate bound, no speed scaling.
   static Ebslam3dConfig thesis();
 
   /// Throws std::invalid_argument naming the offending parameter.
@@ -198,6 +211,9 @@ class EventSlam3d {
   /// Tracking state and its evidence after the last batch.
   const TrackingHealth& health() const { return health_; }
   std::uint64_t processedEvents() const { return processed_; }
+  /// Smoothed speeds of the estimate that scale the diffusion: [rad/s] and [m/s].
+  double angularSpeed() const { return angular_speed_; }
+  double linearSpeed() const { return linear_speed_; }
   std::uint64_t rejectedEvents() const { return rejected_; }
   /// Time of the last event seen [us] (INT64_MIN before the first).
   std::int64_t lastEventTime() const { return last_t_us_; }
@@ -207,6 +223,8 @@ class EventSlam3d {
 
  private:
   void runBatch(int b);
+  void updateMotion();
+  double diffusionScale(double speed, double reference) const;
   void updateHealth(float best_sum, int b, double dt_s);
   void splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q, const Eigen::Vector3f& t,
              float weight);
@@ -220,6 +238,13 @@ class EventSlam3d {
   std::int64_t batch_end_us_ = 0;       // time of the batch's last event [us]
   std::int64_t prev_batch_end_us_ = 0;  // of the previous batch (0 before the first)
   bool have_prev_batch_ = false;
+  // Motion estimate for the speed-scaled diffusion: the estimate at the start of the current
+  // window, its time, the smoothed speeds [rad/s], [m/s] (start: the reference speeds, scale 1).
+  Pose3 motion_ref_pose_;
+  std::int64_t motion_ref_us_ = 0;
+  bool motion_ref_set_ = false;
+  double angular_speed_ = 0.0;
+  double linear_speed_ = 0.0;
   int in_batch_ = 0;
   double share_accumulator_ = 0.0;
   // Rate cap: events accepted in the current window, its start, the share applied in it.
