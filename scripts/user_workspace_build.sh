@@ -56,13 +56,14 @@ EOF
 #include <ebslam_msgs/EventArray.h>
 #include <ros/ros.h>
 
+void onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
+  ROS_INFO_THROTTLE(1.0, "%zu events", msg->events.size());
+}
+
 int main(int argc, char** argv) {
   ros::init(argc, argv, "count_events");
   ros::NodeHandle nh;
-  ros::Subscriber sub = nh.subscribe<ebslam_msgs::EventArray>(
-      "events", 10, [](const ebslam_msgs::EventArray::ConstPtr& msg) {
-        ROS_INFO_THROTTLE(1.0, "%zu events", msg->events.size());
-      });
+  ros::Subscriber sub = nh.subscribe("events", 10, onEvents);
   ros::spin();
   return 0;
 }

@@ -1,5 +1,6 @@
 #include "ebslam_msgs/event_conversions.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace ebslam_msgs {
@@ -53,7 +54,10 @@ EventArray toMsg(const ebslam::EventVector& events, const ebslam::SensorSize& se
 }
 
 ebslam::SensorSize appendFromMsg(const EventArray& msg, ebslam::EventVector& out) {
-  out.reserve(out.size() + msg.events.size());
+  // Geometric growth: reserving exactly the new size on every message would copy the whole
+  // buffer per message (quadratic for a consumer that appends a long recording).
+  const std::size_t needed = out.size() + msg.events.size();
+  if (needed > out.capacity()) out.reserve(std::max(needed, 2 * out.capacity()));
   for (const Event& m : msg.events) out.push_back(fromMsg(m));
   return ebslam::SensorSize{msg.width, msg.height};
 }

@@ -233,6 +233,7 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
   std::map<std::int64_t, cv::Mat> colour_waiting, depth_waiting;
   std::vector<std::int64_t> frame_stamps_us;
   std::vector<ebslam::RgbdLedObservation> observations;
+  std::vector<double> frame_t_s, frame_motion;  // for the clock offset measurement
   const auto add_frame = [&](std::int64_t stamp_us, cv::Mat grey, cv::Mat depth) {
     if (!frame_stamps_us.empty() && stamp_us <= frame_stamps_us.back()) return;  // out of order
     frame_stamps_us.push_back(stamp_us);
@@ -246,7 +247,9 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
                                topics.colour + " (" + std::to_string(frame.grey.cols) + "x" +
                                std::to_string(frame.grey.rows) + "): record depth_registered");
     }
+    frame_t_s.push_back(frame.t_s);
     if (auto o = tracker.push(std::move(frame))) observations.push_back(*o);
+    frame_motion.push_back(std::max(0, tracker.lastChangedPixels()));
   };
   for (const rosbag::MessageInstance& m : view) {
     if (m.getTopic() == topics.events) {
@@ -308,6 +311,17 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
     out.frame_rate_hz = 1.0 / periods[periods.size() / 2];
   }
 
+  if (options.measure_clock_offset) {
+    out.measured_clock_offset_s = ebslam::estimateDepthClockOffset(events, frame_t_s, frame_motion);
+    if (!out.measured_clock_offset_s) {
+      out.problem =
+          "the depth camera's clock offset could not be measured (the plate's motion in the "
+          "colour frames does not match the eDVS event rate): pass it with "
+          "--depth-clock-offset instead of --measure-clock-offset";
+      return out;
+    }
+    pairing_config.depth_clock_offset_s = *out.measured_clock_offset_s;
+  }
   ebslam::LedExtractionConfig edvs = options.edvs;
   edvs.led_frequency_hz = options.led_frequency_hz;
   edvs.width = static_cast<int>(sensor.width);
@@ -324,7 +338,7 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
   base.edvs = options.solve.initial_edvs;
   base.edvs.width = edvs.width;
   base.edvs.height = edvs.height;
-  base.depth_clock_offset_s = options.depth_clock_offset_s;
+  base.depth_clock_offset_s = pairing_config.depth_clock_offset_s;
   if (out.frame_rate_hz > 0.0) base.depth_frame_rate_hz = out.frame_rate_hz;
 
   const std::size_t min_poses = options.solve.min_correspondences;

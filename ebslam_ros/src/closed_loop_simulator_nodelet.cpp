@@ -171,7 +171,18 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
     ebslam::EventClock clock(config_.publish_clock ? 1.0 : config_.speed);
     clock.anchor(0, ebslam_msgs::toMicroseconds(anchor));
     const ros::WallTime wall_start = ros::WallTime::now();
-    if (config_.publish_clock) publishClock(anchor);
+    if (config_.lockstep) {
+      // The first step runs on the command of the tick at time 0, as every later one.
+      std::size_t commands = 0;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        commands = commands_;
+      }
+      publishClock(anchor);
+      waitFor([&] { return commands_ > commands; }, "cmd_vel after the clock tick");
+    } else if (config_.publish_clock) {
+      publishClock(anchor);
+    }
     publishFloorPlan(anchor);
     const ebslam::SensorSize sensor{
         static_cast<std::uint32_t>(config_.simulator.events.camera.width),

@@ -75,6 +75,10 @@ void printResult(const ebslam_ros::BagCalibration& calibration) {
   }
   std::printf("; not in the eDVS events in %zu, rest too short for the eDVS in %zu\n",
               p.edvs_missing, p.too_short_for_edvs);
+  if (calibration.measured_clock_offset_s) {
+    std::printf("measured depth camera clock offset: %.4f s\n",
+                *calibration.measured_clock_offset_s);
+  }
   std::printf("usable poses: %zu\n", p.correspondences.size());
   if (!calibration.result) return;
   const ebslam::DedvsCalibrationResult& r = *calibration.result;
@@ -131,6 +135,8 @@ int main(int argc, char** argv) {
   app.add_option("--depth-clock-offset", options.depth_clock_offset_s,
                  "depth camera clock offset: event time = frame stamp - offset [s]")
       ->capture_default_str();
+  app.add_flag("--measure-clock-offset", options.measure_clock_offset,
+               "measure the depth camera clock offset from the plate's motion instead");
   app.add_option("--events-topic", options.topics.events)->capture_default_str();
   app.add_option("--colour-topic", options.topics.colour)->capture_default_str();
   app.add_option("--depth-topic", options.topics.depth)->capture_default_str();

@@ -1,7 +1,8 @@
 // Autonomous exploration (thesis 7.4) as a nodelet: ebslam::Explorer (exploration.h) driven by
 // EB-SLAM's pose, its normalisation map and the bump ring. Topics (relative names):
 //  - pose (geometry_msgs/PoseWithCovarianceStamped, in), base_link in ~map_frame as EventSlam2d
-//    publishes it; the first pose centres the hex grid;
+//    publishes it; the first pose centres the hex grid (or ~initial_pose, when set, from the first
+//    control step until the first pose: the localisation's start, as ebslam_explore starts);
 //  - bump (ebslam_msgs/Bump, in): the bump ring's readings; a contact in any reading since the
 //    last control step counts (pressed segments of all of them, the last one's direction);
 //  - map/normalisation (nav_msgs/OccupancyGrid, in, with ~use_localisation_map): EventSlam2d's
@@ -114,6 +115,7 @@ class ExplorationNodelet : public nodelet::Nodelet {
     // A non-finite pose reaches the explorer, which counts it as no pose.
     pending_pose_ = ebslam::Pose2{p.position.x, p.position.y, yawOf(p.orientation)};
     pose_stamp_ = msg->header.stamp;
+    pose_seen_ = true;
   }
 
   void onBump(const ebslam_msgs::Bump::ConstPtr& msg) {
@@ -169,12 +171,16 @@ class ExplorationNodelet : public nodelet::Nodelet {
   void onControl(const ros::TimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
     const ros::Time now = ros::Time::now();
+    if (!pending_pose_ && !pose_seen_ && config_.initial_pose) {
+      pending_pose_ = config_.initial_pose;  // the localisation's start, until its first pose
+    }
     if (!explorer_ && pending_pose_ && std::isfinite(pending_pose_->x) &&
         std::isfinite(pending_pose_->y)) {
       try {
         explorer_.emplace(config_.exploration, Eigen::Vector2d(pending_pose_->x, pending_pose_->y));
-        NODELET_INFO("first pose (%.2f, %.2f) m: the exploration grid is centred there",
-                     pending_pose_->x, pending_pose_->y);
+        NODELET_INFO("%s (%.2f, %.2f) m: the exploration grid is centred there",
+                     pose_seen_ ? "first pose" : "~initial_pose", pending_pose_->x,
+                     pending_pose_->y);
       } catch (const std::exception& error) {
         NODELET_ERROR_THROTTLE(kWarnPeriodS, "explorer not started: %s", error.what());
       }
@@ -411,6 +417,7 @@ class ExplorationNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::optional<ebslam::Explorer> explorer_;  // from the first pose
   std::optional<ebslam::Pose2> pending_pose_, last_pose_;
+  bool pose_seen_ = false;  // a pose arrived (~initial_pose is used until then)
   ros::Time pose_stamp_;
   ebslam::BumpReading pending_bump_;
   std::optional<ebslam::GridMap2f> z_;

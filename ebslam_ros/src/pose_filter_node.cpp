@@ -283,6 +283,8 @@ void PoseFilterNode::onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
 }
 
 void PoseFilterNode::publish(const ros::Time& stamp) {
+  // Maps first: a node that acts on the pose (the explorer) then has the maps of the same events.
+  if (after_update_) after_update_(*backend_, stamp);
   const ebslam::Pose2 sensor = backend_->estimate();
   const ebslam::Pose2 mount_inverse = inverse(*mount_);
   const ebslam::Pose2 base = compose(sensor, mount_inverse);
@@ -367,7 +369,6 @@ void PoseFilterNode::publish(const ros::Time& stamp) {
       tf_broadcaster_.sendTransform(transforms);
     }
   }
-  if (after_update_) after_update_(*backend_, stamp);
 }
 
 bool PoseFilterNode::onReset(ebslam_msgs::ResetPose::Request& request,

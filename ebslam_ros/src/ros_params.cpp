@@ -700,6 +700,12 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
   c.use_localisation_map = param<bool>(nh, "use_localisation_map", c.use_localisation_map);
   c.markers_period_s = param<double>(nh, "markers_period", c.markers_period_s);
   requirePositive(c.markers_period_s, nh, "markers_period");
+  if (nh.hasParam("initial_pose")) {
+    const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
+    c.initial_pose = ebslam::Pose2{start[0], start[1], start[2]};
+  } else {
+    ebslam_msgs::markParamRead(nh, "initial_pose");
+  }
   return c;
 }
 

@@ -57,6 +57,9 @@ struct BagCalibrationOptions {
   /// Depth camera clock: event time = frame stamp - depth_clock_offset_s [s]; written into
   /// the result's sensors.
   double depth_clock_offset_s = 0.0;
+  /// Measure the offset instead (ebslam::estimateDepthClockOffset: the plate's motion in the
+  /// frames against the event rate) and use it.
+  bool measure_clock_offset = false;
   ebslam::RgbdLedConfig rgbd;            ///< led_frequency_hz is set from above
   ebslam::LedExtractionConfig edvs;      ///< frequency and sensor size are set from the bag
   ebslam::LedPairingConfig pairing;      ///< depth_clock_offset_s is set from above
@@ -67,6 +70,9 @@ struct BagCalibration {
   std::size_t events = 0;
   std::size_t frames = 0;      ///< colour frames paired with a depth frame
   double frame_rate_hz = 0.0;  ///< median over the frame stamps
+  /// The measured clock offset (measure_clock_offset) [s]; empty if not measured or not
+  /// measurable.
+  std::optional<double> measured_clock_offset_s;
   ebslam::LedPairing pairing;  ///< poses: pairing.correspondences
   /// The solution; empty when there were too few poses to solve.
   std::optional<ebslam::DedvsCalibrationResult> result;

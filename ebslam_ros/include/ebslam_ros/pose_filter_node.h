@@ -62,7 +62,8 @@ class PoseFilterNode {
   /// Creates the core filter with the sensor's start pose (map frame) and the filter knobs.
   using Factory = std::function<std::unique_ptr<PoseFilterBackend>(
       const ebslam::Pose2& sensor_start, const ebslam::EventFilterConfig& knobs)>;
-  /// Runs after every filter update (mutex held): the SLAM nodelet publishes its map from here.
+  /// Runs after every filter update (mutex held), before its pose is published: the SLAM
+  /// nodelet publishes its map from here.
   using AfterUpdate = std::function<void(const PoseFilterBackend& filter, const ros::Time& stamp)>;
 
   /// Subscribes `events` in `nh`; advertises pose, path, particles, the `reset` service,

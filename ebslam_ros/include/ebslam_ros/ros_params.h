@@ -290,6 +290,11 @@ struct ExplorationNodeConfig {
   /// false: Z stays 0 (only E and the bumps guide the robot).
   bool use_localisation_map = true;
   double markers_period_s = 1.0;  ///< ~markers_period: grid_markers while subscribed [s]
+  /// ~initial_pose [x [m], y [m], yaw [rad]] in ~map_frame: the localisation's start pose (e.g.
+  /// EventSlam2d's ~initial_pose), used from the first control step until the first `pose`
+  /// arrives, as ebslam_explore starts from EB-SLAM's estimate before any event. Unset: the
+  /// explorer stands still until the first pose.
+  std::optional<ebslam::Pose2> initial_pose;
 };
 ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& private_nh);
 

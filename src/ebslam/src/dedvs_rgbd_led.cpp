@@ -298,7 +298,7 @@ RgbdLedTracker::RgbdLedTracker(const RgbdLedConfig& config) : config_(config) {
   config_.validate();
 }
 
-bool RgbdLedTracker::still(const cv::Mat& previous, const cv::Mat& current) const {
+int RgbdLedTracker::changedPixels(const cv::Mat& previous, const cv::Mat& current) const {
   cv::Mat difference;
   cv::absdiff(previous, current, difference);
   cv::Point largest;
@@ -310,11 +310,10 @@ bool RgbdLedTracker::still(const cv::Mat& previous, const cv::Mat& current) cons
     for (int col = 0; col < difference.cols; ++col) {
       if (d[col] <= config_.change_threshold) continue;
       const double dx = col - largest.x, dy = row - largest.y;
-      if (dx * dx + dy * dy <= r2) continue;
-      if (++changed > config_.max_changed_pixels) return false;
+      if (dx * dx + dy * dy > r2) ++changed;
     }
   }
-  return true;
+  return changed;
 }
 
 std::optional<RgbdLedObservation> RgbdLedTracker::close() {
@@ -329,17 +328,18 @@ std::optional<RgbdLedObservation> RgbdLedTracker::push(RgbdLedFrame frame) {
               frame.grey.size() == frame.depth_m.size() && !frame.grey.empty(),
           "RgbdLedTracker: frames must be CV_32FC1 grey and depth images of one size");
   std::optional<RgbdLedObservation> closed;
-  if (!segment_.empty()) {
-    const RgbdLedFrame& previous = segment_.back();
-    require(previous.grey.size() == frame.grey.size(),
+  if (!last_grey_.empty()) {
+    require(last_grey_.size() == frame.grey.size(),
             "RgbdLedTracker: the frame size changed during the recording");
-    require(frame.t_s > previous.t_s, "RgbdLedTracker: frame stamps must increase");
-    if (!still(previous.grey, frame.grey)) {
-      closed = close();
-    } else if (static_cast<int>(segment_.size()) >= config_.max_frames) {
+    require(frame.t_s > last_t_s_, "RgbdLedTracker: frame stamps must increase");
+    last_changed_pixels_ = changedPixels(last_grey_, frame.grey);
+    if (last_changed_pixels_ > config_.max_changed_pixels ||
+        static_cast<int>(segment_.size()) >= config_.max_frames) {
       closed = close();
     }
   }
+  last_grey_ = frame.grey;
+  last_t_s_ = frame.t_s;
   segment_.push_back(std::move(frame));
   return closed;
 }
@@ -389,6 +389,58 @@ LedPairing pairLedObservations(const std::vector<Event>& events,
     pairing.times_s.push_back(t_s);
   }
   return pairing;
+}
+
+std::optional<double> estimateDepthClockOffset(const std::vector<Event>& events,
+                                               const std::vector<double>& frame_t_s,
+                                               const std::vector<double>& frame_motion,
+                                               double max_offset_s, double step_s,
+                                               double min_correlation) {
+  require(frame_t_s.size() == frame_motion.size(),
+          "estimateDepthClockOffset: one motion value per frame");
+  require(std::isfinite(max_offset_s) && max_offset_s >= 0.0 && std::isfinite(step_s) &&
+              step_s > 0.0 && max_offset_s / step_s <= 1e6,
+          "estimateDepthClockOffset: need max_offset_s >= 0, step_s > 0");
+  const std::size_t n = frame_t_s.size();
+  if (n < 3 || events.empty()) return std::nullopt;
+  // Events before t [us] (events sorted by time).
+  const auto before = [&events](double t_s) {
+    const double t_us = t_s * 1e6;
+    return static_cast<double>(
+        std::lower_bound(events.begin(), events.end(), t_us,
+                         [](const Event& e, double t) { return static_cast<double>(e.t_us) < t; }) -
+        events.begin());
+  };
+  const auto correlation = [&](double offset) {
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    const double m = static_cast<double>(n - 1);
+    for (std::size_t k = 1; k < n; ++k) {
+      const double x = frame_motion[k];
+      // Events per second in the interval: frames may be dropped (longer intervals).
+      const double y = (before(frame_t_s[k] - offset) - before(frame_t_s[k - 1] - offset)) /
+                       (frame_t_s[k] - frame_t_s[k - 1]);
+      sx += x;
+      sy += y;
+      sxx += x * x;
+      syy += y * y;
+      sxy += x * y;
+    }
+    const double vx = sxx - sx * sx / m, vy = syy - sy * sy / m;
+    if (!(vx > 0.0) || !(vy > 0.0)) return 0.0;
+    return (sxy - sx * sy / m) / std::sqrt(vx * vy);
+  };
+  double best = -2.0, best_offset = 0.0;
+  const int steps = static_cast<int>(std::floor(max_offset_s / step_s));
+  for (int i = -steps; i <= steps; ++i) {
+    const double offset = i * step_s;
+    const double c = correlation(offset);
+    if (c > best) {
+      best = c;
+      best_offset = offset;
+    }
+  }
+  if (best < min_correlation) return std::nullopt;
+  return best_offset;
 }
 
 std::string diagnoseLedPairing(const LedPairing& pairing, std::size_t min_poses,

@@ -213,5 +213,34 @@ TEST(LedPairing, TooFewPosesAreExplained) {
   EXPECT_NE(edvs.find("eDVS events"), std::string::npos) << edvs;
 }
 
+TEST(DepthClockOffset, MeasuredFromThePlatesMotion) {
+  // The plate moves for 50 ms every 300 ms: 20 events/ms while it moves, 2/ms background.
+  // Frames at 30 Hz stamped 12 ms late; their motion is the moving time within their interval.
+  const double offset = 0.012;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const auto moving = [](double t) { return std::fmod(t, 0.3) >= 0.25; };
+  std::vector<Event> events;
+  for (std::int64_t us = 0; us < 6000000; ++us) {
+    const double rate = moving(us * 1e-6) ? 0.02 : 0.002;  // per us
+    if (uniform(rng) < rate) events.push_back({us, 1, 1, true});
+  }
+  std::vector<double> stamps, motion;
+  for (int k = 0; k < 170; ++k) {
+    const double t = 0.05 + k / kFrameRate;  // true exposure time
+    stamps.push_back(t + offset);
+    double moved = 0.0;
+    for (double s = t - 1.0 / kFrameRate; s < t; s += 1e-4) moved += moving(s) ? 1e-4 : 0.0;
+    motion.push_back(k == 0 ? 0.0 : 1000.0 * moved);
+  }
+  const std::optional<double> measured = estimateDepthClockOffset(events, stamps, motion);
+  ASSERT_TRUE(measured.has_value());
+  EXPECT_NEAR(*measured, offset, 0.002);
+  // No motion in the frames: nothing to measure.
+  std::vector<double> still(motion.size(), 0.0);
+  EXPECT_FALSE(estimateDepthClockOffset(events, stamps, still).has_value());
+  EXPECT_THROW(estimateDepthClockOffset(events, stamps, {1.0}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace ebslam

@@ -3,7 +3,9 @@
 // depth per depth frame, solves eq. 8.5 with Ceres and writes the sensors (R, t, eDVS
 // intrinsics and distortion) as the sensors.yaml the fusion reads (readDedvsSensors).
 //
-// A run directory holds:
+// The run directory's led_depth.txt comes from the simulator; a real rig is calibrated from its
+// recorded bag with `rosrun ebslam_ros dedvs_calibrate_bag --bag FILE` (finds the LED in the
+// colour frames too). A run directory holds:
 //   events.bin     eDVS events (dedvs_io.h format)
 //   led_depth.txt  one line per depth frame with the LED: `t_s u v depth_m x y z` (t on the
 //                  event clock [s], depth pixel [px], depth [m], true LED point in the depth

@@ -120,13 +120,19 @@ class RgbdLedTracker {
   std::optional<RgbdLedObservation> push(RgbdLedFrame frame);
   /// Closes the last segment.
   std::optional<RgbdLedObservation> finish();
+  /// Pixels that changed between the last two frames pushed (outside the LED disc; the
+  /// plate's motion), -1 before the second frame.
+  int lastChangedPixels() const { return last_changed_pixels_; }
 
  private:
-  bool still(const cv::Mat& previous, const cv::Mat& current) const;
+  int changedPixels(const cv::Mat& previous, const cv::Mat& current) const;
   std::optional<RgbdLedObservation> close();
 
   RgbdLedConfig config_;
   std::vector<RgbdLedFrame> segment_;
+  cv::Mat last_grey_;
+  double last_t_s_ = 0.0;
+  int last_changed_pixels_ = -1;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -162,6 +168,20 @@ LedPairing pairLedObservations(const std::vector<Event>& events,
                                const std::vector<RgbdLedObservation>& observations,
                                const LedExtractionConfig& extraction,
                                const LedPairingConfig& config = {});
+
+/// Measures the depth camera's clock offset (event time = frame stamp - offset) from the
+/// plate's motion: frame_motion[k] (k >= 1) is how much the colour image changed between
+/// frames k-1 and k (RgbdLedTracker::lastChangedPixels), the eDVS fires while the plate moves;
+/// the offset in [-max_offset_s, max_offset_s] (steps of step_s) that maximises the correlation
+/// of frame_motion with the event count in [t_{k-1}, t_k] - offset. `events` sorted by time,
+/// frame_t_s increasing [s]. std::nullopt when the correlation stays below min_correlation
+/// (no motion, or the sensors did not see the same thing). Throws std::invalid_argument for
+/// mismatched sizes or non-positive steps.
+std::optional<double> estimateDepthClockOffset(const std::vector<Event>& events,
+                                               const std::vector<double>& frame_t_s,
+                                               const std::vector<double>& frame_motion,
+                                               double max_offset_s = 0.1, double step_s = 0.0005,
+                                               double min_correlation = 0.5);
 
 /// What keeps `pairing` from a calibration, in words a user can act on (empty when it has
 /// at least `min_poses` poses). frame_rate_hz: the recording's colour frame rate [Hz].
