@@ -1,5 +1,7 @@
 #include "ebslam_ros/calibration_bag.h"
 
+#include "ebslam_ros/conversions.h"
+
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -25,36 +27,6 @@ namespace {
 
 const char* const kColourFrame = "camera_rgb_optical_frame";
 const char* const kEdvsFrame = "edvs_optical_frame";
-
-sensor_msgs::CameraInfo cameraInfo(int width, int height, double fx, double fy, double cx,
-                                   double cy, const std_msgs::Header& header) {
-  sensor_msgs::CameraInfo info;
-  info.header = header;
-  info.width = static_cast<std::uint32_t>(width);
-  info.height = static_cast<std::uint32_t>(height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {fx, 0, cx, 0, fy, cy, 0, 0, 1};
-  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  info.P = {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0};
-  return info;
-}
-
-sensor_msgs::Image imageMsg(const cv::Mat& image, const std::string& encoding,
-                            const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.height = static_cast<std::uint32_t>(image.rows);
-  msg.width = static_cast<std::uint32_t>(image.cols);
-  msg.encoding = encoding;
-  msg.is_bigendian = 0;
-  msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize());
-  msg.data.resize(static_cast<std::size_t>(msg.step) * image.rows);
-  for (int r = 0; r < image.rows; ++r) {
-    std::memcpy(&msg.data[static_cast<std::size_t>(r) * msg.step], image.ptr(r), msg.step);
-  }
-  return msg;
-}
 
 // A message's pixels as a cv::Mat header on its data (no copy), checked against its size.
 cv::Mat wrap(const sensor_msgs::Image& msg, int type, const std::string& topic) {
@@ -167,10 +139,10 @@ SimulatedCalibrationBag writeSimulatedCalibrationBag(
       std_msgs::Header header;
       header.stamp = ros::Time(options.clock_origin_s + frame.stamp_s);
       header.frame_id = kColourFrame;
-      bag.write(topics.colour, header.stamp, imageMsg(frame.colour, "bgr8", header));
-      bag.write(topics.depth, header.stamp, imageMsg(frame.depth_mm, "16UC1", header));
-      const sensor_msgs::CameraInfo info = cameraInfo(camera.width, camera.height, camera.fx,
-                                                      camera.fy, camera.cx, camera.cy, header);
+      bag.write(topics.colour, header.stamp, toImageMsg(frame.colour, "bgr8", header));
+      bag.write(topics.depth, header.stamp, toImageMsg(frame.depth_mm, "16UC1", header));
+      const sensor_msgs::CameraInfo info = toCameraInfoMsg(camera.width, camera.height, camera.fx,
+                                                           camera.fy, camera.cx, camera.cy, header);
       bag.write(topics.colour_info, header.stamp, info);
       bag.write(topics.camera_info, header.stamp, info);
     }
@@ -190,8 +162,8 @@ SimulatedCalibrationBag writeSimulatedCalibrationBag(
     bag.write(topics.events, msg.header.stamp, msg);
     if (messages++ % 10 == 0) {
       bag.write(topics.edvs_info, msg.header.stamp,
-                cameraInfo(edvs.width, edvs.height, edvs.focal_px, edvs.focal_px,
-                           edvs.principal_point.x(), edvs.principal_point.y(), msg.header));
+                toCameraInfoMsg(edvs.width, edvs.height, edvs.focal_px, edvs.focal_px,
+                                edvs.principal_point.x(), edvs.principal_point.y(), msg.header));
     }
     batch.clear();
   };

@@ -43,6 +43,7 @@
 #include "ebslam/simulator_scenes.h"
 #include "ebslam/trajectory.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/conversions.h"
 
 namespace {
 
@@ -145,36 +146,6 @@ void addBoxesBesidePath(ebslam::Scene& scene, const ebslam::Trajectory& path, in
                    ebslam::makeDeadLeavesTexture(leaves), 0.004, colour);
     ++placed;
   }
-}
-
-sensor_msgs::CameraInfo cameraInfo(int width, int height, double fx, double fy, double cx,
-                                   double cy, const std::string& frame_id) {
-  sensor_msgs::CameraInfo info;
-  info.header.frame_id = frame_id;
-  info.width = static_cast<std::uint32_t>(width);
-  info.height = static_cast<std::uint32_t>(height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {fx, 0, cx, 0, fy, cy, 0, 0, 1};
-  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  info.P = {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0};
-  return info;
-}
-
-sensor_msgs::Image imageMsg(const cv::Mat& image, const std::string& encoding,
-                            const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.height = static_cast<std::uint32_t>(image.rows);
-  msg.width = static_cast<std::uint32_t>(image.cols);
-  msg.encoding = encoding;
-  msg.is_bigendian = 0;
-  msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize());
-  msg.data.resize(static_cast<std::size_t>(msg.step) * image.rows);
-  for (int r = 0; r < image.rows; ++r) {
-    std::memcpy(&msg.data[static_cast<std::size_t>(r) * msg.step], image.ptr(r), msg.step);
-  }
-  return msg;
 }
 
 geometry_msgs::Transform transformMsg(const Eigen::Isometry3d& t) {
@@ -324,11 +295,12 @@ void writeSession(const SessionOptions& options) {
     const ebslam_msgs::EventArray msg =
         ebslam_msgs::toMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame);
     bag.write("/edvs/events", msg.header.stamp, msg);
-    sensor_msgs::CameraInfo info = cameraInfo(
-        edvs_camera.width, edvs_camera.height, edvs_camera.focal_px, edvs_camera.focal_px,
-        edvs_camera.principal_point.x(), edvs_camera.principal_point.y(), edvs_frame);
-    info.header.stamp = msg.header.stamp;
-    if (event_messages % 10 == 0) bag.write("/edvs/camera_info", msg.header.stamp, info);
+    if (event_messages % 10 == 0) {
+      bag.write("/edvs/camera_info", msg.header.stamp,
+                toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
+                                edvs_camera.focal_px, edvs_camera.principal_point.x(),
+                                edvs_camera.principal_point.y(), msg.header));
+    }
     event_count += pending.size();
     ++event_messages;
     pending.clear();
@@ -352,13 +324,13 @@ void writeSession(const SessionOptions& options) {
     std_msgs::Header header;
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = rgb_frame;
-    bag.write("/camera/rgb/image_rect_color", header.stamp, imageMsg(frame.colour, "bgr8", header));
+    bag.write("/camera/rgb/image_rect_color", header.stamp,
+              toImageMsg(frame.colour, "bgr8", header));
     bag.write("/camera/depth_registered/image_raw", header.stamp,
-              imageMsg(frame.depth_mm, "16UC1", header));
-    sensor_msgs::CameraInfo info =
-        cameraInfo(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
-                   depth_camera.cx, depth_camera.cy, rgb_frame);
-    info.header = header;
+              toImageMsg(frame.depth_mm, "16UC1", header));
+    const sensor_msgs::CameraInfo info =
+        toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
+                        depth_camera.cx, depth_camera.cy, header);
     bag.write("/camera/rgb/camera_info", header.stamp, info);
     bag.write("/camera/depth_registered/camera_info", header.stamp, info);
     ++rgbd_frames;
@@ -427,11 +399,10 @@ void writeDedvsSession(const SessionOptions& options) {
                            edvs_frame);
     bag.write("/edvs/events", msg.header.stamp, msg);
     if (event_messages % 10 == 0) {
-      sensor_msgs::CameraInfo info = cameraInfo(
-          edvs_camera.width, edvs_camera.height, edvs_camera.focal_px, edvs_camera.focal_px,
-          edvs_camera.principal_point.x(), edvs_camera.principal_point.y(), edvs_frame);
-      info.header.stamp = msg.header.stamp;
-      bag.write("/edvs/camera_info", msg.header.stamp, info);
+      bag.write("/edvs/camera_info", msg.header.stamp,
+                toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
+                                edvs_camera.focal_px, edvs_camera.principal_point.x(),
+                                edvs_camera.principal_point.y(), msg.header));
     }
     event_count += pending.size();
     ++event_messages;
@@ -454,18 +425,17 @@ void writeDedvsSession(const SessionOptions& options) {
     std_msgs::Header header;
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = depth_frame;
-    sensor_msgs::CameraInfo info =
-        cameraInfo(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
-                   depth_camera.cx, depth_camera.cy, depth_frame);
-    info.header = header;
+    const sensor_msgs::CameraInfo info =
+        toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
+                        depth_camera.cx, depth_camera.cy, header);
     bag.write("/camera/depth_registered/image_raw", header.stamp,
-              imageMsg(frame.depth_mm, "16UC1", header));
+              toImageMsg(frame.depth_mm, "16UC1", header));
     bag.write("/camera/depth_registered/camera_info", header.stamp, info);
     ++depth_frames;
     if (frame.t_s + 1e-6 >= next_colour_s) {
       next_colour_s = std::max(next_colour_s, frame.t_s) + 1.0 / rgb_rate;
       bag.write("/camera/rgb/image_rect_color", header.stamp,
-                imageMsg(frame.colour, "bgr8", header));
+                toImageMsg(frame.colour, "bgr8", header));
       bag.write("/camera/rgb/camera_info", header.stamp, info);
       ++colour_frames;
     }

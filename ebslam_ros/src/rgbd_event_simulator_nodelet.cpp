@@ -41,44 +41,12 @@
 #include <stdexcept>
 #include <thread>
 
+#include "ebslam_ros/conversions.h"
 #include "ebslam_ros/ground_truth_publisher.h"
 #include "ebslam_ros/paced_event_publisher.h"
 #include "ebslam_ros/ros_params.h"
 
 namespace ebslam_ros {
-namespace {
-
-sensor_msgs::CameraInfo cameraInfoOf(const ebslam::PinholeCamera& c,
-                                     const std_msgs::Header& header) {
-  sensor_msgs::CameraInfo info;
-  info.header = header;
-  info.width = static_cast<std::uint32_t>(c.width);
-  info.height = static_cast<std::uint32_t>(c.height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);  // the simulated images are rectified
-  info.K = {c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0};
-  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
-  info.P = {c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return info;
-}
-
-// A continuous CV_16UC1 or CV_8UC3 image -> Image message (copied).
-sensor_msgs::Image imageOf(const cv::Mat& image, const std::string& encoding,
-                           const std_msgs::Header& header) {
-  const cv::Mat data = image.isContinuous() ? image : image.clone();
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.width = static_cast<std::uint32_t>(data.cols);
-  msg.height = static_cast<std::uint32_t>(data.rows);
-  msg.encoding = encoding;
-  msg.is_bigendian = 0;
-  msg.step = static_cast<std::uint32_t>(data.cols * data.elemSize());
-  msg.data.resize(static_cast<std::size_t>(msg.step) * msg.height);
-  std::memcpy(msg.data.data(), data.data, msg.data.size());
-  return msg;
-}
-
-}  // namespace
 
 class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
  public:
@@ -204,11 +172,14 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     header.frame_id = config_.depth_frame;
     // The depth camera's own clock (exposure + offset), mapped as the event clock.
     header.stamp = events_->rosTime(std::llround(frame.stamp_s * 1e6));
-    const sensor_msgs::CameraInfo info = cameraInfoOf(config_.simulator.depth.camera, header);
-    depth_pub_.publish(imageOf(frame.depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
+    const ebslam::PinholeCamera& camera = config_.simulator.depth.camera;
+    const sensor_msgs::CameraInfo info = toCameraInfoMsg(camera.width, camera.height, camera.fx,
+                                                         camera.fy, camera.cx, camera.cy, header);
+    depth_pub_.publish(
+        toImageMsg(frame.depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
     depth_info_pub_.publish(info);
     if (colour_pub_.getNumSubscribers() > 0) {
-      colour_pub_.publish(imageOf(frame.colour, sensor_msgs::image_encodings::BGR8, header));
+      colour_pub_.publish(toImageMsg(frame.colour, sensor_msgs::image_encodings::BGR8, header));
     }
     colour_info_pub_.publish(info);
   }
