@@ -296,10 +296,11 @@ void writeSession(const SessionOptions& options) {
         ebslam_msgs::toMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame);
     bag.write("/edvs/events", msg.header.stamp, msg);
     if (event_messages % 10 == 0) {
-      bag.write("/edvs/camera_info", msg.header.stamp,
-                toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
-                                edvs_camera.focal_px, edvs_camera.principal_point.x(),
-                                edvs_camera.principal_point.y(), msg.header));
+      bag.write(
+          "/edvs/camera_info", msg.header.stamp,
+          ebslam_ros::toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
+                                      edvs_camera.focal_px, edvs_camera.principal_point.x(),
+                                      edvs_camera.principal_point.y(), msg.header));
     }
     event_count += pending.size();
     ++event_messages;
@@ -325,12 +326,12 @@ void writeSession(const SessionOptions& options) {
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = rgb_frame;
     bag.write("/camera/rgb/image_rect_color", header.stamp,
-              toImageMsg(frame.colour, "bgr8", header));
+              ebslam_ros::toImageMsg(frame.colour, "bgr8", header));
     bag.write("/camera/depth_registered/image_raw", header.stamp,
-              toImageMsg(frame.depth_mm, "16UC1", header));
+              ebslam_ros::toImageMsg(frame.depth_mm, "16UC1", header));
     const sensor_msgs::CameraInfo info =
-        toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
-                        depth_camera.cx, depth_camera.cy, header);
+        ebslam_ros::toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx,
+                                    depth_camera.fy, depth_camera.cx, depth_camera.cy, header);
     bag.write("/camera/rgb/camera_info", header.stamp, info);
     bag.write("/camera/depth_registered/camera_info", header.stamp, info);
     ++rgbd_frames;
@@ -399,10 +400,11 @@ void writeDedvsSession(const SessionOptions& options) {
                            edvs_frame);
     bag.write("/edvs/events", msg.header.stamp, msg);
     if (event_messages % 10 == 0) {
-      bag.write("/edvs/camera_info", msg.header.stamp,
-                toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
-                                edvs_camera.focal_px, edvs_camera.principal_point.x(),
-                                edvs_camera.principal_point.y(), msg.header));
+      bag.write(
+          "/edvs/camera_info", msg.header.stamp,
+          ebslam_ros::toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
+                                      edvs_camera.focal_px, edvs_camera.principal_point.x(),
+                                      edvs_camera.principal_point.y(), msg.header));
     }
     event_count += pending.size();
     ++event_messages;
@@ -426,16 +428,16 @@ void writeDedvsSession(const SessionOptions& options) {
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = depth_frame;
     const sensor_msgs::CameraInfo info =
-        toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx, depth_camera.fy,
-                        depth_camera.cx, depth_camera.cy, header);
+        ebslam_ros::toCameraInfoMsg(depth_camera.width, depth_camera.height, depth_camera.fx,
+                                    depth_camera.fy, depth_camera.cx, depth_camera.cy, header);
     bag.write("/camera/depth_registered/image_raw", header.stamp,
-              toImageMsg(frame.depth_mm, "16UC1", header));
+              ebslam_ros::toImageMsg(frame.depth_mm, "16UC1", header));
     bag.write("/camera/depth_registered/camera_info", header.stamp, info);
     ++depth_frames;
     if (frame.t_s + 1e-6 >= next_colour_s) {
       next_colour_s = std::max(next_colour_s, frame.t_s) + 1.0 / rgb_rate;
       bag.write("/camera/rgb/image_rect_color", header.stamp,
-                toImageMsg(frame.colour, "bgr8", header));
+                ebslam_ros::toImageMsg(frame.colour, "bgr8", header));
       bag.write("/camera/rgb/camera_info", header.stamp, info);
       ++colour_frames;
     }
