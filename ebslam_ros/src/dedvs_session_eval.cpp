@@ -6,7 +6,9 @@
 // mount_rpy of config/ebslam3d.yaml; mount_xyz 0).
 //   rosrun ebslam_ros dedvs_session_eval --session test/data/dedvs_session/dedvs_session.bag
 //     --calibration ebslam_ros/config/dedvs_sensors.yaml --poses out.bag
-// Prints one line per scored trajectory; exit status 0, 1 on an input error.
+// Prints one line per scored trajectory (position RMSE: the shipped session's 4.5 s path is nearly
+// straight, so the alignment's rotation, fitted to positions, is too loose to score orientation);
+// exit status 0, 1 on an input error.
 #include <CLI/CLI.hpp>
 
 #include <Eigen/Geometry>
@@ -53,9 +55,9 @@ int main(int argc, char** argv) {
           ebslam_ros::evaluateEdvsTrajectory(run.estimate, session.ground_truth);
       std::printf(
           "offline core: %zu events (%zu with depth), %zu poses: position RMSE %.2f cm (max "
-          "%.2f cm), rotation RMSE %.2f deg\n",
+          "%.2f cm)\n",
           session.events.size(), run.events_with_depth, run.estimate.size(),
-          100.0 * eval.position_rmse_m, 100.0 * eval.position_max_m, eval.rotation_rmse_deg);
+          100.0 * eval.position_rmse_m, 100.0 * eval.position_max_m);
     }
     if (!poses_bag.empty()) {
       const ebslam_ros::BagTrajectory base = ebslam_ros::readBagTrajectory(poses_bag, pose_topic);
@@ -70,11 +72,9 @@ int main(int argc, char** argv) {
       if (!estimate_out.empty()) ebslam::writeTumTrajectory(estimate_out, estimate);
       const ebslam::TrajectoryEvaluation eval =
           ebslam_ros::evaluateEdvsTrajectory(estimate, session.ground_truth);
-      std::printf(
-          "published (%s, %zu poses): position RMSE %.2f cm (max %.2f cm), rotation RMSE %.2f "
-          "deg\n",
-          pose_topic.c_str(), estimate.size(), 100.0 * eval.position_rmse_m,
-          100.0 * eval.position_max_m, eval.rotation_rmse_deg);
+      std::printf("published (%s, %zu poses): position RMSE %.2f cm (max %.2f cm)\n",
+                  pose_topic.c_str(), estimate.size(), 100.0 * eval.position_rmse_m,
+                  100.0 * eval.position_max_m);
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "dedvs_session_eval: %s\n", error.what());
