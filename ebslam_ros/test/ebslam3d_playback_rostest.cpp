@@ -39,6 +39,7 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/dedvs_session.h"
+#include "rostest_util.h"
 
 namespace {
 
@@ -46,26 +47,6 @@ namespace {
 // associates frames per message (waiting for the next frame up to a wall-time limit) and its
 // filter runs per message instead of per 10 ms chunk.
 constexpr double kMaxRmseRatio = 1.5;
-
-Eigen::Isometry3d toIsometry(const geometry_msgs::Pose& p) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() =
-      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
-          .normalized()
-          .toRotationMatrix();
-  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return t;
-}
-
-// base_link -> edvs_optical_frame of config/ebslam3d.yaml: mount_xyz 0, mount_rpy
-// [-pi/2, 0, -pi/2] (optical z along base_link's x).
-Eigen::Isometry3d mount() {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  return t;
-}
 
 // The node's configuration: config/ebslam3d.yaml (the core's default preset) with the launch
 // file's focal length (the calibration's edvs_focal_px) and seed 1.
@@ -253,7 +234,8 @@ TEST(Ebslam3dPlayback, PosesMapAndFramesTrackTheGroundTruthLikeTheOfflineCore) {
   // The eDVS path (base_link * mount) against the bag's ground truth, scored as the offline one.
   ebslam::Trajectory estimate;
   for (const auto& p : rec.poses) {
-    const Eigen::Isometry3d t = toIsometry(p.pose.pose) * mount();
+    const Eigen::Isometry3d t =
+        ebslam_ros_test::toIsometry(p.pose.pose) * ebslam_ros_test::ebslam3dMount();
     ebslam::StampedPose s;
     s.t_s = p.header.stamp.toSec();
     s.position = t.translation();

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "rostest_util.h"
 
 namespace {
 
@@ -37,32 +38,12 @@ namespace {
 // 1.8-2.0 cm on the first 5 s of freiburg1_xyz, seed 1).
 constexpr double kMaxRmseM = 0.035;
 
-Eigen::Isometry3d toIsometry(const geometry_msgs::Pose& p) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() =
-      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
-          .normalized()
-          .toRotationMatrix();
-  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return t;
-}
-
 ebslam::StampedPose toStamped(double t_s, const Eigen::Isometry3d& t) {
   ebslam::StampedPose p;
   p.t_s = t_s;
   p.position = t.translation();
   p.orientation = Eigen::Quaterniond(t.rotation());
   return p;
-}
-
-// base_link -> edvs_optical_frame of config/ebslam3d.yaml: mount_xyz 0, mount_rpy
-// [-pi/2, 0, -pi/2] (optical z along base_link's x).
-Eigen::Isometry3d mount() {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  return t;
 }
 
 struct Recorder {
@@ -189,11 +170,12 @@ TEST(Ebslam3dSimulation, PosesInMapWithInputStampsTrackTheGroundTruth) {
   const ebslam::DedvsSensors sensors = ebslam::readDedvsSensors(CALIBRATION);
   ebslam::Trajectory estimate, truth;
   for (const auto& p : rec.poses) {
-    estimate.push_back(toStamped(p.header.stamp.toSec(), toIsometry(p.pose.pose) * mount()));
+    estimate.push_back(toStamped(p.header.stamp.toSec(), ebslam_ros_test::toIsometry(p.pose.pose) *
+                                                             ebslam_ros_test::ebslam3dMount()));
   }
   for (const auto& t : rec.truth) {
-    truth.push_back(
-        toStamped(t.header.stamp.toSec(), toIsometry(t.pose) * sensors.depth_from_edvs));
+    truth.push_back(toStamped(t.header.stamp.toSec(),
+                              ebslam_ros_test::toIsometry(t.pose) * sensors.depth_from_edvs));
   }
   ebslam::TrajectoryEvaluationConfig config;
   config.max_time_offset_s = 0.05;

@@ -2,16 +2,41 @@
 // Helpers shared by ebslam_ros's rostests.
 
 #include <ebslam_msgs/EventArray.h>
+#include <geometry_msgs/Pose.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
 
+#include <Eigen/Geometry>
+
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace ebslam_ros_test {
+
+/// A pose message as an isometry (quaternion normalised).
+inline Eigen::Isometry3d toIsometry(const geometry_msgs::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() =
+      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
+          .normalized()
+          .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
+  return t;
+}
+
+/// base_link -> edvs_optical_frame of config/ebslam3d.yaml: mount_xyz 0, mount_rpy
+/// [-pi/2, 0, -pi/2] (optical z along base_link's x).
+inline Eigen::Isometry3d ebslam3dMount() {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  return t;
+}
 
 /// Spins (5 ms steps) until `done()` or `seconds` of wall time have passed; returns done().
 template <typename Predicate>
