@@ -36,6 +36,8 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "ebslam/dedvs_scene.h"
 #include "ebslam/dedvs_simulator.h"
@@ -251,6 +253,64 @@ void copyInTimeOrder(const std::string& unordered_path, const SessionOptions& op
   }
 }
 
+// The simulated eDVS into /edvs/events messages of a fixed stream-time length, stamped by `clock`
+// (simulated us -> ROS us), with /edvs/camera_info every tenth message, as the driver publishes.
+class EventBagWriter {
+ public:
+  EventBagWriter(rosbag::Bag& bag, ebslam::EventClock& clock, const ebslam::CameraModel& camera,
+                 std::string frame, double message_rate_hz)
+      : bag_(bag),
+        clock_(clock),
+        camera_(camera),
+        frame_(std::move(frame)),
+        period_us_(static_cast<std::int64_t>(1e6 / message_rate_hz)) {}
+
+  void add(const std::vector<ebslam::TrueDepthEvent>& events) {
+    for (const ebslam::TrueDepthEvent& e : events) {
+      if (message_end_us_ == 0) message_end_us_ = e.event.t_us + period_us_;
+      while (e.event.t_us >= message_end_us_) {
+        flush();
+        message_end_us_ += period_us_;
+      }
+      pending_.push_back(e.event);
+    }
+  }
+
+  // Writes the pending events as one message (none if there are none).
+  void flush() {
+    if (pending_.empty()) return;
+    for (ebslam::Event& e : pending_) e.t_us = clock_.stamp(e.t_us).value_or(-1);
+    const ebslam_msgs::EventArray msg =
+        ebslam_msgs::toMsg(pending_,
+                           ebslam::SensorSize{static_cast<std::uint32_t>(camera_.width),
+                                              static_cast<std::uint32_t>(camera_.height)},
+                           frame_);
+    bag_.write("/edvs/events", msg.header.stamp, msg);
+    if (messages_ % 10 == 0) {
+      bag_.write("/edvs/camera_info", msg.header.stamp,
+                 ebslam_ros::toCameraInfoMsg(camera_.width, camera_.height, camera_.focal_px,
+                                             camera_.focal_px, camera_.principal_point.x(),
+                                             camera_.principal_point.y(), msg.header));
+    }
+    events_ += pending_.size();
+    ++messages_;
+    pending_.clear();
+  }
+
+  std::size_t events() const { return events_; }
+  std::size_t messages() const { return messages_; }
+
+ private:
+  rosbag::Bag& bag_;
+  ebslam::EventClock& clock_;
+  const ebslam::CameraModel& camera_;
+  const std::string frame_;
+  const std::int64_t period_us_;
+  ebslam::EventVector pending_;
+  std::int64_t message_end_us_ = 0;  // end of the message being filled [simulated us]
+  std::size_t events_ = 0, messages_ = 0;
+};
+
 void writeSession(const SessionOptions& options) {
   double clock_origin_s = 0.0;
   const ebslam::Trajectory edvs = edvsTrajectory(options, &clock_origin_s);
@@ -285,43 +345,17 @@ void writeSession(const SessionOptions& options) {
 
   writeStaticMount(bag, ros::Time(clock_origin_s + options.t_begin_s), rgb_frame, depth_from_edvs);
 
-  ebslam::EventVector pending;
-  std::int64_t message_end_us = 0;
-  const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
-  std::size_t event_count = 0, event_messages = 0, rgbd_frames = 0;
-  auto flush_events = [&]() {
-    if (pending.empty()) return;
-    for (ebslam::Event& e : pending) e.t_us = clock.stamp(e.t_us).value_or(-1);
-    const ebslam_msgs::EventArray msg =
-        ebslam_msgs::toMsg(pending, ebslam::SensorSize{128, 128}, edvs_frame);
-    bag.write("/edvs/events", msg.header.stamp, msg);
-    if (event_messages % 10 == 0) {
-      bag.write(
-          "/edvs/camera_info", msg.header.stamp,
-          ebslam_ros::toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
-                                      edvs_camera.focal_px, edvs_camera.principal_point.x(),
-                                      edvs_camera.principal_point.y(), msg.header));
-    }
-    event_count += pending.size();
-    ++event_messages;
-    pending.clear();
-  };
+  EventBagWriter event_writer(bag, clock, edvs_camera, edvs_frame, options.event_message_rate_hz);
   const auto on_events = [&](const std::vector<ebslam::TrueDepthEvent>& events) {
-    for (const ebslam::TrueDepthEvent& e : events) {
-      if (message_end_us == 0) message_end_us = e.event.t_us + period_us;
-      while (e.event.t_us >= message_end_us) {
-        flush_events();
-        message_end_us += period_us;
-      }
-      pending.push_back(e.event);
-    }
+    event_writer.add(events);
   };
+  std::size_t rgbd_frames = 0;
   const int frame_step =
       std::max(1, static_cast<int>(config.depth.frame_rate_hz / options.rgbd_rate_hz + 0.5));
   int frame_index = 0;
   const auto on_depth = [&](const ebslam::DepthFrame& frame) {
     if (frame_index++ % frame_step != 0) return;
-    flush_events();  // events before the frame go first, as a live system would receive them
+    event_writer.flush();  // events before the frame go first, as a live system would receive them
     std_msgs::Header header;
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = rgb_frame;
@@ -339,7 +373,7 @@ void writeSession(const SessionOptions& options) {
   const double t_end = std::min(edvs.back().t_s, options.t_begin_s + options.duration_s);
   const ebslam::DedvsRun run =
       simulator.simulate(scene, rig, options.t_begin_s, t_end, on_events, on_depth);
-  flush_events();
+  event_writer.flush();
 
   const std::size_t ground_truth_poses = writeGroundTruth(bag, run, options, clock_origin_s);
   bag.close();
@@ -348,9 +382,10 @@ void writeSession(const SessionOptions& options) {
   std::printf(
       "session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu RGB-D frames "
       "%dx%d, %zu ground-truth poses, %zu scene planes\n",
-      options.output.c_str(), t_end - options.t_begin_s, event_count, event_messages,
-      event_count / std::max(1e-9, t_end - options.t_begin_s), rgbd_frames, depth_camera.width,
-      depth_camera.height, ground_truth_poses, scene.planes.size());
+      options.output.c_str(), t_end - options.t_begin_s, event_writer.events(),
+      event_writer.messages(), event_writer.events() / std::max(1e-9, t_end - options.t_begin_s),
+      rgbd_frames, depth_camera.width, depth_camera.height, ground_truth_poses,
+      scene.planes.size());
 }
 
 // The hand-held D-eDVS session (thesis 8.2-8.4): the simulator's rig (eDVS on top of a
@@ -386,44 +421,15 @@ void writeDedvsSession(const SessionOptions& options) {
   const std::string depth_frame = "camera_rgb_optical_frame";  // registered depth: colour's
   const std::string edvs_frame = "edvs_optical_frame";
 
-  ebslam::EventVector pending;
-  std::int64_t message_end_us = 0;
-  const auto period_us = static_cast<std::int64_t>(1e6 / options.event_message_rate_hz);
-  std::size_t event_count = 0, event_messages = 0, depth_frames = 0, colour_frames = 0;
-  auto flush_events = [&]() {
-    if (pending.empty()) return;
-    for (ebslam::Event& e : pending) e.t_us = clock.stamp(e.t_us).value_or(-1);
-    const ebslam_msgs::EventArray msg =
-        ebslam_msgs::toMsg(pending,
-                           ebslam::SensorSize{static_cast<std::uint32_t>(edvs_camera.width),
-                                              static_cast<std::uint32_t>(edvs_camera.height)},
-                           edvs_frame);
-    bag.write("/edvs/events", msg.header.stamp, msg);
-    if (event_messages % 10 == 0) {
-      bag.write(
-          "/edvs/camera_info", msg.header.stamp,
-          ebslam_ros::toCameraInfoMsg(edvs_camera.width, edvs_camera.height, edvs_camera.focal_px,
-                                      edvs_camera.focal_px, edvs_camera.principal_point.x(),
-                                      edvs_camera.principal_point.y(), msg.header));
-    }
-    event_count += pending.size();
-    ++event_messages;
-    pending.clear();
-  };
+  EventBagWriter event_writer(bag, clock, edvs_camera, edvs_frame, options.event_message_rate_hz);
   const auto on_events = [&](const std::vector<ebslam::TrueDepthEvent>& events) {
-    for (const ebslam::TrueDepthEvent& e : events) {
-      if (message_end_us == 0) message_end_us = e.event.t_us + period_us;
-      while (e.event.t_us >= message_end_us) {
-        flush_events();
-        message_end_us += period_us;
-      }
-      pending.push_back(e.event);
-    }
+    event_writer.add(events);
   };
+  std::size_t depth_frames = 0, colour_frames = 0;
   const double rgb_rate = options.rgb_rate_hz > 0.0 ? options.rgb_rate_hz : 1e9;
   double next_colour_s = -1.0;
   const auto on_depth = [&](const ebslam::DepthFrame& frame) {
-    flush_events();  // events before the frame go first, as a live system would receive them
+    event_writer.flush();  // events before the frame go first, as a live system would receive them
     std_msgs::Header header;
     header.stamp = ros::Time(clock_origin_s + frame.stamp_s);
     header.frame_id = depth_frame;
@@ -445,7 +451,7 @@ void writeDedvsSession(const SessionOptions& options) {
   const double t_end = std::min(rig.back().t_s, options.t_begin_s + options.duration_s);
   const ebslam::DedvsRun run =
       simulator.simulate(scene, rig, options.t_begin_s, t_end, on_events, on_depth);
-  flush_events();
+  event_writer.flush();
 
   std::size_t ground_truth_poses = 0;
   double next_t = -1.0;
@@ -469,9 +475,10 @@ void writeDedvsSession(const SessionOptions& options) {
   std::printf(
       "D-eDVS session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu depth frames "
       "and %zu colour frames %dx%d, %zu ground-truth poses, %zu scene planes\n",
-      options.output.c_str(), t_end - options.t_begin_s, event_count, event_messages,
-      event_count / std::max(1e-9, t_end - options.t_begin_s), depth_frames, colour_frames,
-      depth_camera.width, depth_camera.height, ground_truth_poses, scene.planes.size());
+      options.output.c_str(), t_end - options.t_begin_s, event_writer.events(),
+      event_writer.messages(), event_writer.events() / std::max(1e-9, t_end - options.t_begin_s),
+      depth_frames, colour_frames, depth_camera.width, depth_camera.height, ground_truth_poses,
+      scene.planes.size());
 }
 
 }  // namespace
