@@ -79,7 +79,7 @@ smoke() {
     # shellcheck disable=SC1090
     source "${setup}"
     set -e
-    for pkg in ebslam_msgs ebslam_ros dasp_ros edvs_driver my_robot; do
+    for pkg in ebslam_ros_common ebslam_msgs ebslam_ros dasp_ros edvs_driver my_robot; do
       echo "  rospack find ${pkg}: $(rospack find "${pkg}")"
     done
     local launch

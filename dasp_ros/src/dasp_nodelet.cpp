@@ -16,7 +16,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/SuperpixelArray.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -54,7 +54,7 @@ class DaspNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Dasp " + getName(),
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "Dasp " + getName(),
                              [&] { config_ = loadDaspNodeConfig(pnh); });
     segmenter_ = std::make_unique<dasp::DaspSegmenter>(config_.dasp);
 
@@ -66,7 +66,7 @@ class DaspNodelet : public nodelet::Nodelet {
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("superpixels/cloud", 1);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<DaspNodeletConfig>>(pnh);
-    ebslam_msgs::markReconfigureParamsRead<DaspNodeletConfig>(pnh);
+    ebslam_ros_common::markReconfigureParamsRead<DaspNodeletConfig>(pnh);
     reconfigure_->setCallback(
         [this](DaspNodeletConfig& c, uint32_t level) { onReconfigure(c, level); });
 

@@ -14,7 +14,7 @@
 #include <camera_info_manager/camera_info_manager.h>
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -67,7 +67,7 @@ class OpenNi2SourceNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "OpenNi2Source " + getName(),
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "OpenNi2Source " + getName(),
                              [&] { config_ = loadOpenNi2SourceConfig(pnh); });
     image_transport::ImageTransport transport(nh);
     color_pub_ = transport.advertise("rgb/image_rect_color", 2);

@@ -13,7 +13,7 @@
 // skipped, and named in an error the first time (also when looping, at any rate). Frames of
 // another size with the calibration's aspect ratio get scaled intrinsics (a warning per size).
 #include <dasp/rgbd_io.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -37,7 +37,7 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "RGB-D folder source " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "RGB-D folder source " + getName(), [&] {
       config_ = loadRgbdFolderSourceConfig(getPrivateNodeHandle());
       frames_ = dasp::listRgbdFolder(config_.folder);
       if (frames_.empty()) {

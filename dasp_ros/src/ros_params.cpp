@@ -1,14 +1,14 @@
 #include "dasp_ros/ros_params.h"
 
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 
 #include <cmath>
 #include <stdexcept>
 
 namespace dasp_ros {
 
-using ebslam_msgs::param;
-using ebslam_msgs::requirePositive;
+using ebslam_ros_common::param;
+using ebslam_ros_common::requirePositive;
 
 RgbdFolderSourceConfig loadRgbdFolderSourceConfig(const ros::NodeHandle& nh) {
   RgbdFolderSourceConfig config;

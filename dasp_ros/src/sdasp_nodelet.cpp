@@ -19,7 +19,7 @@
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
@@ -54,7 +54,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Sdasp " + getName(),
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "Sdasp " + getName(),
                              [&] { config_ = loadSdaspNodeConfig(pnh); });
     array_topic_ = nh.resolveName("superpixels");
     labels_topic_ = nh.resolveName("superpixels/labels");
@@ -65,7 +65,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     ucm_pub_ = transport.advertise("segments/ucm", 1);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SdaspNodeletConfig>>(pnh);
-    ebslam_msgs::markReconfigureParamsRead<SdaspNodeletConfig>(pnh);
+    ebslam_ros_common::markReconfigureParamsRead<SdaspNodeletConfig>(pnh);
     reconfigure_->setCallback([this](SdaspNodeletConfig& c, uint32_t) {
       std::lock_guard<std::mutex> lock(mutex_);
       dasp::SdaspConfig next = config_.sdasp;

@@ -20,7 +20,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -48,7 +48,7 @@ class TdaspNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "Tdasp " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "Tdasp " + getName(), [&] {
       config_ = loadTdaspNodeConfig(pnh);
       tdasp_ = std::make_unique<dasp::TemporalDasp>(config_.tdasp);
     });

@@ -28,7 +28,7 @@
 // 1 / ~step), which drives the next step. A wait longer than ~lockstep_timeout (wall) is logged
 // and the step goes on with what arrived. ~speed is then an upper bound of the pace.
 #include <ebslam_msgs/Bump.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nodelet/nodelet.h>
@@ -74,7 +74,7 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
     const std::string default_plan =
         package.empty() ? "" : package + "/data/floor_plans/office.txt";
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "closed-loop simulator " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "closed-loop simulator " + getName(), [&] {
       config_ = loadClosedLoopSimulatorNodeConfig(getPrivateNodeHandle(), default_plan);
       plan_ = ebslam::readFloorPlan(config_.floor_plan, config_.simulator.robot.radius_m);
       simulator_ = std::make_unique<ebslam::ClosedLoopSimulator>(plan_, config_.simulator);

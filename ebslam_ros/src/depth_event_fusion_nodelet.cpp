@@ -26,7 +26,7 @@
 // kept frame or newer than the latest by more than ~max_frame_age (NaN; when frames keep
 // arriving that means the event and depth clocks disagree by more than a frame).
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -75,7 +75,7 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "depth event fusion " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "depth event fusion " + getName(), [&] {
       config_ = loadDepthEventFusionNodeConfig(getPrivateNodeHandle());
       if (!config_.edvs_camera_info) fusion_.emplace(config_.sensors, config_.fusion);
     });

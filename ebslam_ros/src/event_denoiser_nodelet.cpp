@@ -13,7 +13,7 @@
 // (dynamic_reconfigure), ~queue_size, ~max_backward; see README.md.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <boost/thread/recursive_mutex.hpp>
@@ -44,13 +44,13 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event denoiser " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event denoiser " + getName(), [&] {
       config_ = loadEventDenoiserNodeConfig(getPrivateNodeHandle());
     });
     ros::NodeHandle& nh = getNodeHandle();
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventDenoiserKnobsConfig>>(
         reconfigure_mutex_, getPrivateNodeHandle());
-    ebslam_msgs::markReconfigureParamsRead<EventDenoiserKnobsConfig>(getPrivateNodeHandle());
+    ebslam_ros_common::markReconfigureParamsRead<EventDenoiserKnobsConfig>(getPrivateNodeHandle());
     EventDenoiserKnobsConfig start;
     start.window = 1e-6 * static_cast<double>(config_.filter.window_us);
     start.min_support = config_.filter.min_support;

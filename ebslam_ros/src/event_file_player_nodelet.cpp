@@ -12,7 +12,7 @@
 // damaged line otherwise (that event is dropped); an event whose time falls outside ros::Time is
 // dropped. Counts of both are reported at the end of the file.
 // With ~wait_for_subscribers playback starts 0.5 s after the first subscriber has connected.
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
@@ -38,7 +38,7 @@ class EventFilePlayerNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event file player " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event file player " + getName(), [&] {
       config_ = loadEventFilePlayerConfig(getPrivateNodeHandle());
       openFile();
     });

@@ -1,7 +1,7 @@
 // EB-PF (thesis 6.4-6.5): localisation of an upward-looking eDVS under a ceiling with a known
 // edge map. Topics, frames and services: PoseFilterNode (pose_filter_node.h) and README.md.
 // The map (~map) is a yaml in map_server's or ebslam_simulate_events' layout (ceiling_map_io.h).
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
@@ -44,7 +44,7 @@ class EventParticleFilterNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventParticleFilter " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "EventParticleFilter " + getName(), [&] {
       const EventParticleFilterNodeConfig config =
           loadEventParticleFilterNodeConfig(getPrivateNodeHandle());
       const ebslam::CeilingCamera camera(config.node.sensor.camera,

@@ -5,7 +5,7 @@
 // while subscribed: the events of the last ~accumulation_time seconds of event time, ON in
 // ~on_colour and OFF in ~off_colour ([r, g, b]) over black or the newest `image`; stamp = the
 // newest event's ts, frame = the events' frame. Nothing is published before the first event.
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
@@ -30,7 +30,7 @@ class EventRendererNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(),
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(),
                              [&] { config_ = loadEventRendererConfig(getPrivateNodeHandle()); });
     ros::NodeHandle& nh = getNodeHandle();
     image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);

@@ -17,7 +17,7 @@
 // t / ~speed, as the event file player). Pacing: the message for t is sent at
 // wall_start + t / ~speed (or as soon as simulated when the simulator is slower than that).
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
@@ -54,7 +54,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     const std::string default_scenario =
         package.empty() ? "" : package + "/data/sample_session/pioneer_360_excerpt.yaml";
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "event simulator " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event simulator " + getName(), [&] {
       config_ = loadEventSimulatorNodeConfig(getPrivateNodeHandle(), default_scenario);
       prepare();
     });

@@ -14,7 +14,7 @@
 //  - service save_map (ebslam_msgs/SaveMap): <prefix>.png + <prefix>.yaml in map_server's
 //    layout, loadable by EventParticleFilter's ~map.
 // Both are in ~map_frame, stamped with the last event's time.
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -63,7 +63,7 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventSlam2d " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "EventSlam2d " + getName(), [&] {
       const EventSlam2dNodeConfig config = loadEventSlam2dNodeConfig(getPrivateNodeHandle());
       map_period_ = ros::WallDuration(config.map_publish_period_s);
       map_period_on_stamps_ = config.map_period_on_stamps;

@@ -13,7 +13,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/DepthEventArray.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <geometry_msgs/PoseArray.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -170,7 +170,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "EventSlam3d " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "EventSlam3d " + getName(), [&] {
       ros::NodeHandle& nh = getNodeHandle();
       ros::NodeHandle& pnh = getPrivateNodeHandle();
       config_ = loadEventSlam3dNodeConfig(pnh);
@@ -197,7 +197,7 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
 
       reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventSlam3dKnobsConfig>>(
           reconfigure_mutex_, pnh);
-      ebslam_msgs::markReconfigureParamsRead<EventSlam3dKnobsConfig>(pnh);
+      ebslam_ros_common::markReconfigureParamsRead<EventSlam3dKnobsConfig>(pnh);
       EventSlam3dKnobsConfig start;
       start.num_particles = config_.slam.num_particles;
       start.batch_size = config_.slam.batch_size;

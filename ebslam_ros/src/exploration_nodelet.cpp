@@ -23,7 +23,7 @@
 // Time: control steps run on ROS time (sim time with /clock).
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ebslam_msgs/Bump.h>
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/OccupancyGrid.h>
@@ -55,7 +55,7 @@ class ExplorationNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "exploration " + getName(),
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "exploration " + getName(),
                              [&] { config_ = loadExplorationNodeConfig(getPrivateNodeHandle()); });
     ros::NodeHandle& nh = getNodeHandle();
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 10);

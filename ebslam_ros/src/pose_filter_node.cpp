@@ -14,7 +14,7 @@
 #include <stdexcept>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "ebslam_msgs/ros_param_helpers.h"
+#include "ebslam_ros_common/ros_param_helpers.h"
 
 namespace ebslam_ros {
 
@@ -107,7 +107,7 @@ PoseFilterNode::PoseFilterNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
 
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventFilterKnobsConfig>>(
       reconfigure_mutex_, private_nh_);
-  ebslam_msgs::markReconfigureParamsRead<EventFilterKnobsConfig>(private_nh_);
+  ebslam_ros_common::markReconfigureParamsRead<EventFilterKnobsConfig>(private_nh_);
   EventFilterKnobsConfig start;
   start.num_particles = knobs_.num_particles;
   start.batch_size = knobs_.batch_size;

@@ -18,7 +18,7 @@
 // EventSimulator). Pacing: the message for t is sent at wall_start + (t - start) / ~speed, or as
 // soon as simulated when the simulator is slower. Seeded (~seed): the same run every time.
 // The simulation runs in a thread of its own; the nodelet stops it on unload.
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
@@ -61,7 +61,7 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     const std::string default_trajectory =
         package.empty() ? "" : package + "/data/sample_session/pioneer_360_excerpt.txt";
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_msgs::startOrFail(getPrivateNodeHandle(), "RGB-D event simulator " + getName(), [&] {
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "RGB-D event simulator " + getName(), [&] {
       config_ = loadRgbdEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
       prepare();
     });

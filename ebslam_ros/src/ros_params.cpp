@@ -2,7 +2,7 @@
 
 #include "ebslam_ros/flat_yaml.h"
 
-#include <ebslam_msgs/ros_param_helpers.h>
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include <ros/names.h>
 
 #include <ebslam/dedvs_io.h>
@@ -20,17 +20,17 @@
 namespace ebslam_ros {
 namespace {
 
-using ebslam_msgs::param;
-using ebslam_msgs::requirePositive;
+using ebslam_ros_common::param;
+using ebslam_ros_common::requirePositive;
 
 [[noreturn]] void fail(const ros::NodeHandle& nh, const std::string& name, const std::string& why) {
-  ebslam_msgs::failParam(nh, name, why);
+  ebslam_ros_common::failParam(nh, name, why);
 }
 
 std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
                              const std::array<double, 3>& default_value) {
   std::vector<double> values;
-  ebslam_msgs::markParamRead(nh, name);
+  ebslam_ros_common::markParamRead(nh, name);
   if (!nh.getParam(name, values)) {
     if (nh.hasParam(name)) fail(nh, name, "must be a list of three numbers");
     return default_value;
@@ -273,7 +273,7 @@ EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
   }
   config.slam = loadEbslam3dConfig(nh, base);
   std::vector<double> start;
-  ebslam_msgs::markParamRead(nh, "initial_pose");
+  ebslam_ros_common::markParamRead(nh, "initial_pose");
   if (nh.getParam("initial_pose", start)) {
     if (start.size() != 6) fail(nh, "initial_pose", "must be [x, y, z, roll, pitch, yaw]");
     for (double v : start) {
@@ -704,7 +704,7 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
     const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
     c.initial_pose = ebslam::Pose2{start[0], start[1], start[2]};
   } else {
-    ebslam_msgs::markParamRead(nh, "initial_pose");
+    ebslam_ros_common::markParamRead(nh, "initial_pose");
   }
   return c;
 }

@@ -21,7 +21,7 @@
 #include <optional>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "ebslam_msgs/ros_param_helpers.h"
+#include "ebslam_ros_common/ros_param_helpers.h"
 #include "edvs/link_supervisor.h"
 #include "edvs_driver/EdvsConfig.h"
 #include "edvs_driver/ros_params.h"
@@ -73,7 +73,7 @@ void EdvsDriverNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-  ebslam_msgs::startOrFail(pnh, "edvs_driver " + getName(),
+  ebslam_ros_common::startOrFail(pnh, "edvs_driver " + getName(),
                            [&] { params_ = loadDriverParams(pnh); });
   batch_size_ = params_.batch_size;
   publish_rate_hz_ = params_.publish_rate_hz;
@@ -105,7 +105,7 @@ void EdvsDriverNodelet::onInit() {
 
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<EdvsConfig>>(reconfigure_mutex_, pnh);
-  ebslam_msgs::markReconfigureParamsRead<EdvsConfig>(pnh);
+  ebslam_ros_common::markReconfigureParamsRead<EdvsConfig>(pnh);
   reconfigure_server_->setCallback(
       [this](EdvsConfig& c, std::uint32_t level) { reconfigure(c, level); });
 

@@ -23,7 +23,7 @@ import textwrap
 import time
 import xml.etree.ElementTree as ET
 
-PACKAGES = ["ebslam", "dasp", "edvs", "ebslam_msgs", "dasp_ros", "edvs_driver", "ebslam_ros"]
+PACKAGES = ["ebslam", "dasp", "edvs", "ebslam_ros_common", "ebslam_msgs", "dasp_ros", "edvs_driver", "ebslam_ros"]
 STARTUP_S = 45.0  # per launch: nodelets load, the first messages arrive (2 shared cores)
 
 # (name, package, launch file, args, topics each of which must carry a message)

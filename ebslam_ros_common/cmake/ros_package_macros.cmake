@@ -1,6 +1,11 @@
 # The build every ROS package of this workspace shares (dasp_ros, ebslam_ros, edvs_driver): exported
-# by ebslam_msgs as a catkin CFG_EXTRAS file, so `find_package(catkin COMPONENTS ebslam_msgs ...)`
-# brings these in. Targets get C++17, the project warnings (errors) and the catkin libraries.
+# by ebslam_ros_common as a catkin CFG_EXTRAS file, so
+# `find_package(catkin COMPONENTS ebslam_ros_common ...)` brings these in. Targets get C++17, the
+# project warnings (errors) and the catkin libraries.
+
+# This file's folder: the source's cmake/ in the devel space, share/ebslam_ros_common/cmake
+# installed; nodelet_node.cpp.in lies next to it in both.
+set(EBSLAM_ROS_COMMON_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
 
 # Language settings and ROS_PACKAGE_WARNINGS; call right after project().
 macro(ros_package_setup)
@@ -59,4 +64,27 @@ function(ros_package_gtest name)
   catkin_add_gtest(${name} ${ARG_UNPARSED_ARGUMENTS})
   ros_package_target(${name} LINK ${ARG_LINK} gtest_main DEPENDS ${ARG_DEPENDS}
     DEFINITIONS ${ARG_DEFINITIONS})
+endfunction()
+
+# nodelet_node(<target> NODELET <package/Class> [NAME <node name>])
+# The standalone node of a nodelet: executable <target> (installed into the package's bin folder)
+# whose main, generated from nodelet_node.cpp.in, loads the nodelet into its own process under the
+# node's name (default: <target> without "_node"), with the node's remappings and arguments. Same
+# topics, parameters and services as the nodelet in a manager; a nodelet that fails to start
+# (ebslam_ros_common/ros_param_helpers.h) ends the node with exit status 1.
+function(nodelet_node target)
+  cmake_parse_arguments(ARG "" "NODELET;NAME" "" ${ARGN})
+  if(NOT ARG_NODELET)
+    message(FATAL_ERROR "nodelet_node(${target}): NODELET <package/Class> missing")
+  endif()
+  set(NODE_NAME ${ARG_NAME})
+  if(NOT NODE_NAME)
+    string(REGEX REPLACE "_node$" "" NODE_NAME ${target})
+  endif()
+  set(NODELET_TYPE ${ARG_NODELET})
+  set(source ${CMAKE_CURRENT_BINARY_DIR}/nodelet_nodes/${target}.cpp)
+  configure_file(${EBSLAM_ROS_COMMON_CMAKE_DIR}/nodelet_node.cpp.in ${source} @ONLY)
+  add_executable(${target} ${source})
+  ros_package_target(${target})
+  install(TARGETS ${target} RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 endfunction()

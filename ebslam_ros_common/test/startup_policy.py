@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""rostest of the workspace's startup-failure policy (ebslam_msgs/ros_param_helpers.h) for one
+"""rostest of the workspace's startup-failure policy (ebslam_ros_common/ros_param_helpers.h) for one
 nodelet, driven by the .test file's private parameters:
 
   ~node_pkg, ~node_type  the standalone node that runs the nodelet (e.g. ebslam_ros
@@ -151,4 +151,4 @@ class StartupPolicyTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    rostest.rosrun("ebslam_msgs", "startup_policy", StartupPolicyTest, sys.argv)
+    rostest.rosrun("ebslam_ros_common", "startup_policy", StartupPolicyTest, sys.argv)

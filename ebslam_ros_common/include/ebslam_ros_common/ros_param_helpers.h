@@ -1,6 +1,6 @@
 #pragma once
 // Parameter reading, checks and the one startup-failure policy of the workspace's nodelets (every
-// ROS package of the workspace depends on ebslam_msgs).
+// ROS package of the workspace with nodes depends on ebslam_ros_common).
 //
 // Policy (README "Parameters and failures"):
 //   - a configuration that cannot work: the loader throws std::invalid_argument naming the fully
@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-namespace ebslam_msgs {
+namespace ebslam_ros_common {
 
 namespace detail {
 
@@ -227,4 +227,4 @@ void startOrFail(const ros::NodeHandle& private_nh, const std::string& what, Sta
   warnUnknownParams(private_nh, set_names);
 }
 
-}  // namespace ebslam_msgs
+}  // namespace ebslam_ros_common
