@@ -54,7 +54,7 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ground_truth_publisher.h"
-#include "ebslam_ros/ros_params.h"
+#include "closed_loop_simulator_params.h"
 
 namespace ebslam_ros {
 

@@ -58,7 +58,7 @@
 #include <string>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "ebslam_ros/ros_params.h"
+#include "depth_event_fusion_params.h"
 
 namespace ebslam_ros {
 

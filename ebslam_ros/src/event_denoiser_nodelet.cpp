@@ -33,7 +33,7 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/EventDenoiserKnobsConfig.h"
-#include "ebslam_ros/ros_params.h"
+#include "event_denoiser_params.h"
 
 namespace ebslam_ros {
 

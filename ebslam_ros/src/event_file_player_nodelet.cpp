@@ -27,7 +27,7 @@
 #include <stdexcept>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "ebslam_ros/ros_params.h"
+#include "event_file_player_params.h"
 
 namespace ebslam_ros {
 

@@ -1,5 +1,6 @@
 // EB-PF (thesis 6.4-6.5): localisation of an upward-looking eDVS under a ceiling with a known
-// edge map. Topics, frames and services: PoseFilterNode (pose_filter_node.h) and README.md.
+// edge map. Topics, frames and services: PlanarPoseFilterNodelet (planar_pose_filter_nodelet.h)
+// and README.md.
 // The map (~map) is a yaml in map_server's or ebslam_simulate_events' layout (ceiling_map_io.h).
 #include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
@@ -12,12 +13,12 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "ebslam_ros/ceiling_map_io.h"
-#include "ebslam_ros/pose_filter_node.h"
-#include "ebslam_ros/ros_params.h"
+#include "event_particle_filter_params.h"
+#include "planar_pose_filter_nodelet.h"
 
 namespace ebslam_ros {
 
-class EventParticleFilterNodelet : public nodelet::Nodelet {
+class EventParticleFilterNodelet : public PlanarPoseFilterNodelet {
  private:
   class Backend : public PoseFilterBackend {
    public:
@@ -57,19 +58,17 @@ class EventParticleFilterNodelet : public nodelet::Nodelet {
                    config.filter.filter.num_particles, config.filter.filter.batch_size,
                    config.filter.filter.resample_every);
       const ebslam::EbpfConfig ebpf = config.filter;
-      node_ = std::make_unique<PoseFilterNode>(
-          getNodeHandle(), getPrivateNodeHandle(), config.node, ebpf.filter,
+      startFilter(
+          config.node, ebpf.filter,
           [this, ebpf, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
             ebslam::EbpfConfig c = ebpf;
             c.filter = knobs;
             return std::make_unique<Backend>(c, camera, likelihood_, start);
-          },
-          getName());
+          });
     });
   }
 
   ebslam::GridMap2f likelihood_;
-  std::unique_ptr<PoseFilterNode> node_;
 };
 
 }  // namespace ebslam_ros

@@ -19,7 +19,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 
-#include "ebslam_ros/ros_params.h"
+#include "event_renderer_params.h"
 
 namespace ebslam_ros {
 

@@ -37,7 +37,7 @@
 
 #include "ebslam_ros/ground_truth_publisher.h"
 #include "ebslam_ros/paced_event_publisher.h"
-#include "ebslam_ros/ros_params.h"
+#include "event_simulator_params.h"
 
 namespace ebslam_ros {
 

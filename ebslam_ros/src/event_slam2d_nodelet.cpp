@@ -1,6 +1,6 @@
 // EB-SLAM-2D (thesis 7.2-7.3, alg. 8): an upward-looking eDVS localises itself against a ceiling
 // map it builds from the same events. Pose, path, particles, tf, `reset`, dynamic_reconfigure
-// and diagnostics: PoseFilterNode (pose_filter_node.h). Map outputs (relative names):
+// and diagnostics: PoseFilterNode (planar_pose_filter_nodelet.h). Map outputs (relative names):
 //  - map (nav_msgs/OccupancyGrid, latched, at most every ~map_publish_period of wall time, or of
 //    event time with ~map_period_on_stamps): M = O / (Z + Z0)
 //    scaled so that its 99 % quantile is 100; -1 where no event and no observation fell;
@@ -32,12 +32,12 @@
 #include <vector>
 
 #include "ebslam_ros/ceiling_map_io.h"
-#include "ebslam_ros/pose_filter_node.h"
-#include "ebslam_ros/ros_params.h"
+#include "event_slam2d_params.h"
+#include "planar_pose_filter_nodelet.h"
 
 namespace ebslam_ros {
 
-class EventSlam2dNodelet : public nodelet::Nodelet {
+class EventSlam2dNodelet : public PlanarPoseFilterNodelet {
  private:
   class Backend : public PoseFilterBackend {
    public:
@@ -75,34 +75,33 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
       image_pub_ = getNodeHandle().advertise<sensor_msgs::Image>("map/image", 1);
       normalisation_pub_ =
           getNodeHandle().advertise<nav_msgs::OccupancyGrid>("map/normalisation", 1, true);
-      node_ = std::make_unique<PoseFilterNode>(
-          getNodeHandle(), getPrivateNodeHandle(), config.node, slam.filter,
-          [slam, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
-            ebslam::Ebslam2dConfig c = slam;
-            c.filter = knobs;
-            return std::make_unique<Backend>(c, camera, start);
-          },
-          getName());
-      node_->setAfterUpdate([this](const PoseFilterBackend& backend, const ros::Time& stamp) {
-        if (map_period_on_stamps_) {
-          // A stamp before the last map's (restart after a time jump) starts the period anew.
-          if (!last_map_stamp_.isZero() && stamp >= last_map_stamp_ &&
-              (stamp - last_map_stamp_).toSec() < map_period_.toSec()) {
-            return;
-          }
-          last_map_stamp_ = stamp;
-        } else {
-          const ros::WallTime now = ros::WallTime::now();
-          if (now - last_map_ < map_period_) return;
-          last_map_ = now;
-        }
-        publishMap(static_cast<const Backend&>(backend).slam(), stamp);
-      });
+      startFilter(config.node, slam.filter,
+                  [slam, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
+                    ebslam::Ebslam2dConfig c = slam;
+                    c.filter = knobs;
+                    return std::make_unique<Backend>(c, camera, start);
+                  });
       save_srv_ = getNodeHandle().advertiseService("save_map", &EventSlam2dNodelet::onSave, this);
       NODELET_INFO("EB-SLAM-2D: map %.1f m with %.3f m cells, N=%d B=%d K=%d", slam.map_size_m,
                    slam.cell_size_wtrig * camera.wTrig(), slam.filter.num_particles,
                    slam.filter.batch_size, slam.filter.resample_every);
     });
+  }
+
+  void afterUpdate(const PoseFilterBackend& backend, const ros::Time& stamp) override {
+    if (map_period_on_stamps_) {
+      // A stamp before the last map's (restart after a time jump) starts the period anew.
+      if (!last_map_stamp_.isZero() && stamp >= last_map_stamp_ &&
+          (stamp - last_map_stamp_).toSec() < map_period_.toSec()) {
+        return;
+      }
+      last_map_stamp_ = stamp;
+    } else {
+      const ros::WallTime now = ros::WallTime::now();
+      if (now - last_map_ < map_period_) return;
+      last_map_ = now;
+    }
+    publishMap(static_cast<const Backend&>(backend).slam(), stamp);
   }
 
   void publishMap(const ebslam::EventSlam2d& slam, const ros::Time& stamp) {
@@ -165,9 +164,8 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
   }
 
   bool onSave(ebslam_msgs::SaveMap::Request& request, ebslam_msgs::SaveMap::Response& response) {
-    if (!node_) return false;
-    std::lock_guard<std::mutex> lock(node_->mutex());
-    const auto* backend = static_cast<const Backend*>(node_->backend());
+    std::lock_guard<std::mutex> lock(mutex());
+    const auto* backend = static_cast<const Backend*>(this->backend());
     if (backend == nullptr) {
       response.success = false;
       response.message = "no map yet: no events processed since the start or the last reset";
@@ -192,7 +190,6 @@ class EventSlam2dNodelet : public nodelet::Nodelet {
     return true;
   }
 
-  std::unique_ptr<PoseFilterNode> node_;
   ros::Publisher map_pub_, image_pub_, normalisation_pub_;
   ros::ServiceServer save_srv_;
   ros::WallDuration map_period_{1.0};

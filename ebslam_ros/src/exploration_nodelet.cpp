@@ -45,7 +45,7 @@
 #include <string>
 #include <vector>
 
-#include "ebslam_ros/ros_params.h"
+#include "exploration_params.h"
 
 namespace ebslam_ros {
 

@@ -1,11 +1,20 @@
-// ebslam_ros/conversions.h: image and camera messages of the simulators and bag writers.
+// ebslam_ros/conversions.h: poses and transforms of the pose nodelets (round trips through the
+// messages), image and camera messages of the simulators and bag writers.
 #include "ebslam_ros/conversions.h"
 
 #include <gtest/gtest.h>
 
+#include <tf2/LinearMath/Matrix3x3.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
+
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <random>
 #include <stdexcept>
+#include <vector>
 
 namespace ebslam_ros {
 namespace {
@@ -70,6 +79,90 @@ TEST(Conversions, CameraInfoOfARectifiedPinhole) {
   EXPECT_EQ(info.P[5], 286.0);
   EXPECT_EQ(info.P[6], 119.25);
   EXPECT_EQ(info.P[10], 1.0);
+}
+
+// Random rigid transforms (fixed seed): rotations from the whole sphere, translations in +-5 m.
+std::vector<Eigen::Isometry3d> randomIsometries(int count) {
+  std::mt19937 rng(44);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), metres(-5.0, 5.0);
+  std::vector<Eigen::Isometry3d> out;
+  for (int i = 0; i < count; ++i) {
+    out.push_back(fromXyzRpy({metres(rng), metres(rng), metres(rng)},
+                             {angle(rng), 0.5 * angle(rng), angle(rng)}));
+  }
+  return out;
+}
+
+void expectNear(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double tolerance) {
+  EXPECT_LT((a.translation() - b.translation()).norm(), tolerance);
+  EXPECT_LT((a.linear() - b.linear()).norm(), tolerance);
+}
+
+TEST(Conversions, IsometryRoundTripsThroughPoseAndTransformMessages) {
+  for (const Eigen::Isometry3d& t : randomIsometries(200)) {
+    const geometry_msgs::Pose pose = toPoseMsg(t);
+    geometry_msgs::Transform transform;
+    transform.translation.x = pose.position.x;
+    transform.translation.y = pose.position.y;
+    transform.translation.z = pose.position.z;
+    transform.rotation = pose.orientation;
+    expectNear(toIsometry(transform), t, 1e-12);
+    const geometry_msgs::TransformStamped stamped =
+        toTransformMsg(t, ros::Time(3, 4), "base_link", "edvs_optical_frame");
+    EXPECT_EQ(stamped.header.stamp, ros::Time(3, 4));
+    EXPECT_EQ(stamped.header.frame_id, "base_link");
+    EXPECT_EQ(stamped.child_frame_id, "edvs_optical_frame");
+    expectNear(toIsometry(stamped.transform), t, 1e-12);
+    expectNear(toIsometry(toPose3(t)), t, 1e-12);
+  }
+}
+
+TEST(Conversions, XyzRpyIsTf2sFixedAxisConvention) {
+  for (const std::array<double, 3>& rpy : std::vector<std::array<double, 3>>{
+           {-M_PI / 2, 0.0, -M_PI / 2}, {0.3, -0.2, 2.9}, {1.0, 1.2, -0.4}}) {
+    tf2::Quaternion q;
+    q.setRPY(rpy[0], rpy[1], rpy[2]);
+    const tf2::Transform tf(q, tf2::Vector3(1.0, -2.0, 0.5));
+    geometry_msgs::Transform msg = tf2::toMsg(tf);
+    expectNear(fromXyzRpy({1.0, -2.0, 0.5}, rpy), toIsometry(msg), 1e-12);
+  }
+}
+
+TEST(Conversions, PlanarPoseMatchesItsTransformAndPoseMessage) {
+  for (const ebslam::Pose2& p : std::vector<ebslam::Pose2>{
+           {0.0, 0.0, 0.0}, {1.5, -2.25, 3.0}, {-0.1, 4.0, -M_PI / 2}}) {
+    const geometry_msgs::Pose msg = toPoseMsg(p);
+    EXPECT_EQ(msg.position.x, p.x);
+    EXPECT_EQ(msg.position.y, p.y);
+    EXPECT_EQ(msg.position.z, 0.0);
+    tf2::Quaternion q;
+    tf2::fromMsg(msg.orientation, q);
+    tf2::Matrix3x3 r(q);
+    double roll = 0, pitch = 0, yaw = 0;
+    r.getRPY(roll, pitch, yaw);
+    EXPECT_NEAR(std::remainder(yaw - p.theta, 2 * M_PI), 0.0, 1e-12);
+    EXPECT_NEAR(roll, 0.0, 1e-12);
+    EXPECT_NEAR(pitch, 0.0, 1e-12);
+    const geometry_msgs::TransformStamped t =
+        toTransformMsg(toTransform(p), ros::Time(1), "map", "base_link");
+    EXPECT_EQ(t.transform.translation.x, p.x);
+    EXPECT_EQ(t.transform.translation.y, p.y);
+    EXPECT_EQ(t.transform.translation.z, 0.0);
+    EXPECT_NEAR(std::abs(t.transform.rotation.z * msg.orientation.z +
+                         t.transform.rotation.w * msg.orientation.w),
+                1.0, 1e-12);
+    // The planar transform and the 6-DoF path agree.
+    expectNear(toIsometry(t.transform), fromXyzRpy({p.x, p.y, 0.0}, {0.0, 0.0, p.theta}), 1e-12);
+  }
+}
+
+TEST(Conversions, MountFromTheEbslam3dParameterFile) {
+  // config/ebslam3d.yaml: the eDVS looks along base_link's x (optical z), its x to the right.
+  const Eigen::Isometry3d mount = readMountFromParams(EBSLAM3D_CONFIG);
+  EXPECT_LT(mount.translation().norm(), 1e-12);
+  EXPECT_LT((mount.linear().col(2) - Eigen::Vector3d::UnitX()).norm(), 1e-6);
+  EXPECT_LT((mount.linear().col(0) + Eigen::Vector3d::UnitY()).norm(), 1e-6);
+  EXPECT_THROW(readMountFromParams("/nonexistent/ebslam3d.yaml"), std::runtime_error);
 }
 
 }  // namespace

@@ -39,6 +39,7 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/dedvs_session.h"
+#include "ebslam_ros/conversions.h"
 #include "rostest_util.h"
 
 namespace {
@@ -233,9 +234,10 @@ TEST(Ebslam3dPlayback, PosesMapAndFramesTrackTheGroundTruthLikeTheOfflineCore) {
 
   // The eDVS path (base_link * mount) against the bag's ground truth, scored as the offline one.
   ebslam::Trajectory estimate;
+  // base_link -> eDVS of config/ebslam3d.yaml (the launch file's parameters).
+  const Eigen::Isometry3d mount = ebslam_ros::readMountFromParams(EBSLAM3D_CONFIG);
   for (const auto& p : rec.poses) {
-    const Eigen::Isometry3d t =
-        ebslam_ros_test::toIsometry(p.pose.pose) * ebslam_ros_test::ebslam3dMount();
+    const Eigen::Isometry3d t = ebslam_ros_test::toIsometry(p.pose.pose) * mount;
     ebslam::StampedPose s;
     s.t_s = p.header.stamp.toSec();
     s.position = t.translation();

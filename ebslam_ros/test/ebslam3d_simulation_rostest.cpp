@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/conversions.h"
 #include "rostest_util.h"
 
 namespace {
@@ -169,9 +170,11 @@ TEST(Ebslam3dSimulation, PosesInMapWithInputStampsTrackTheGroundTruth) {
   // optical frame) * depth_from_edvs in world.
   const ebslam::DedvsSensors sensors = ebslam::readDedvsSensors(CALIBRATION);
   ebslam::Trajectory estimate, truth;
+  // base_link -> eDVS of config/ebslam3d.yaml (the launch file's parameters).
+  const Eigen::Isometry3d mount = ebslam_ros::readMountFromParams(EBSLAM3D_CONFIG);
   for (const auto& p : rec.poses) {
-    estimate.push_back(toStamped(p.header.stamp.toSec(), ebslam_ros_test::toIsometry(p.pose.pose) *
-                                                             ebslam_ros_test::ebslam3dMount()));
+    estimate.push_back(
+        toStamped(p.header.stamp.toSec(), ebslam_ros_test::toIsometry(p.pose.pose) * mount));
   }
   for (const auto& t : rec.truth) {
     truth.push_back(toStamped(t.header.stamp.toSec(),

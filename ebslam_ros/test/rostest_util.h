@@ -28,16 +28,6 @@ inline Eigen::Isometry3d toIsometry(const geometry_msgs::Pose& p) {
   return t;
 }
 
-/// base_link -> edvs_optical_frame of config/ebslam3d.yaml: mount_xyz 0, mount_rpy
-/// [-pi/2, 0, -pi/2] (optical z along base_link's x).
-inline Eigen::Isometry3d ebslam3dMount() {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = (Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  return t;
-}
-
 /// Spins (5 ms steps) until `done()` or `seconds` of wall time have passed; returns done().
 template <typename Predicate>
 bool spinUntil(Predicate done, double seconds) {

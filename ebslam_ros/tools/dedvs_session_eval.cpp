@@ -2,13 +2,15 @@
 // on the bag's events and depth frames (as ebslam_experiment_ebslam3d), and with --poses the
 // poses the ROS pipeline published (a bag of /ebslam3d/pose, e.g. recorded during
 // playback.launch slam:=ebslam3d), both against the session's ground truth (eDVS optical frame).
-// The published poses are base_link's: the eDVS pose is base_link * mount (--mount-rpy, the
-// mount_rpy of config/ebslam3d.yaml; mount_xyz 0).
+// The published poses are base_link's: the eDVS pose is base_link * mount, the mounting of the
+// EventSlam3d parameter file (--slam-config, default the package's config/ebslam3d.yaml).
 //   rosrun ebslam_ros dedvs_session_eval --session test/data/dedvs_session/dedvs_session.bag
 //     --calibration ebslam_ros/config/dedvs_sensors.yaml --poses out.bag
 // Prints one line per scored trajectory (position RMSE: the shipped session's 4.5 s path is nearly
 // straight, so the alignment's rotation, fitted to positions, is too loose to score orientation);
 // exit status 0, 1 on an input error.
+#include <ros/package.h>
+
 #include <CLI/CLI.hpp>
 
 #include <Eigen/Geometry>
@@ -20,6 +22,7 @@
 #include <string>
 
 #include "ebslam_ros/bag_trajectory.h"
+#include "ebslam_ros/conversions.h"
 #include "ebslam_ros/dedvs_session.h"
 
 int main(int argc, char** argv) {
@@ -27,7 +30,7 @@ int main(int argc, char** argv) {
   std::string session_bag, calibration, poses_bag, pose_topic = "/ebslam3d/pose";
   std::string estimate_out;
   std::uint64_t seed = 1;
-  std::array<double, 3> mount_rpy = {-M_PI / 2, 0.0, -M_PI / 2};
+  std::string slam_config = ros::package::getPath("ebslam_ros") + "/config/ebslam3d.yaml";
   bool offline = true;
   app.add_option("--session", session_bag, "the session bag (events, depth, ground truth)")
       ->required()
@@ -38,7 +41,9 @@ int main(int argc, char** argv) {
   app.add_option("--poses", poses_bag, "bag of the published poses")->check(CLI::ExistingFile);
   app.add_option("--pose-topic", pose_topic, "pose topic in --poses")->capture_default_str();
   app.add_option("--seed", seed, "filter seed of the offline run")->capture_default_str();
-  app.add_option("--mount-rpy", mount_rpy, "base_link -> eDVS optical frame roll pitch yaw [rad]");
+  app.add_option("--slam-config", slam_config,
+                 "EventSlam3d parameter file whose mount_xyz, mount_rpy give base_link -> eDVS")
+      ->capture_default_str();
   app.add_flag("!--no-offline", offline, "score the published poses only");
   app.add_option("--estimate", estimate_out, "the published eDVS path as a TUM file");
   CLI11_PARSE(app, argc, argv);
@@ -61,12 +66,11 @@ int main(int argc, char** argv) {
     }
     if (!poses_bag.empty()) {
       const ebslam_ros::BagTrajectory base = ebslam_ros::readBagTrajectory(poses_bag, pose_topic);
-      const Eigen::Quaterniond mount_rotation =
-          Eigen::AngleAxisd(mount_rpy[2], Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(mount_rpy[1], Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(mount_rpy[0], Eigen::Vector3d::UnitX());
+      const Eigen::Isometry3d mount = ebslam_ros::readMountFromParams(slam_config);
+      const Eigen::Quaterniond mount_rotation(mount.rotation());
       ebslam::Trajectory estimate = base.trajectory;
       for (ebslam::StampedPose& p : estimate) {
+        p.position += p.orientation * mount.translation();
         p.orientation = (p.orientation * mount_rotation).normalized();
       }
       if (!estimate_out.empty()) ebslam::writeTumTrajectory(estimate_out, estimate);

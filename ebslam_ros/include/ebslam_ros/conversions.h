@@ -1,17 +1,58 @@
 #pragma once
-// Image and camera messages of the simulators and bag writers (RgbdEventSimulator, make_session,
-// the simulated calibration bag): one place for the sensor_msgs layout they all publish.
-// Event messages are converted by ebslam_msgs/event_conversions.h.
+// Core types <-> ROS messages of ebslam_ros: poses and transforms of the pose nodelets (planar
+// ebslam::Pose2 with tf2::Transform, 6-DoF ebslam::Pose3 with Eigen::Isometry3d), and the image
+// and camera messages of the simulators and bag writers (RgbdEventSimulator, make_session, the
+// simulated calibration bag). Event messages are converted by ebslam_msgs/event_conversions.h.
+// Lengths in metres, angles in radians; rotations are fixed-axis roll, pitch, yaw as tf2's
+// setRPY (R = Rz(yaw) Ry(pitch) Rx(roll)).
 
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/time.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <std_msgs/Header.h>
+#include <tf2/LinearMath/Transform.h>
 
+#include <ebslam/ebslam3d.h>
+#include <ebslam/particles2d.h>
+
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <string>
 
 namespace ebslam_ros {
+
+/// A planar pose (x, y, theta about z) as a pose message at z = 0.
+geometry_msgs::Pose toPoseMsg(const ebslam::Pose2& pose);
+/// A rigid transform as a pose message (its rotation as a quaternion).
+geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& transform);
+/// A planar pose as a tf2 transform at z = 0.
+tf2::Transform toTransform(const ebslam::Pose2& pose);
+
+/// parent -> child at `stamp`.
+geometry_msgs::TransformStamped toTransformMsg(const tf2::Transform& transform,
+                                               const ros::Time& stamp, const std::string& parent,
+                                               const std::string& child);
+geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& transform,
+                                               const ros::Time& stamp, const std::string& parent,
+                                               const std::string& child);
+
+/// A transform message as an isometry (quaternion normalised).
+Eigen::Isometry3d toIsometry(const geometry_msgs::Transform& transform);
+/// A 6-DoF core pose as an isometry (quaternion normalised) and back.
+Eigen::Isometry3d toIsometry(const ebslam::Pose3& pose);
+ebslam::Pose3 toPose3(const Eigen::Isometry3d& transform);
+/// Translation `xyz` and fixed-axis roll, pitch, yaw.
+Eigen::Isometry3d fromXyzRpy(const std::array<double, 3>& xyz, const std::array<double, 3>& rpy);
+/// base_link -> sensor of a pose nodelet's parameter file (e.g. config/ebslam3d.yaml): its
+/// mount_xyz and mount_rpy lists as the nodelet reads them (the one place the tools and tests
+/// take the EB-SLAM-3D mounting from). Throws std::runtime_error naming the file when it cannot
+/// be read or lacks either list, or a list is not three numbers.
+Eigen::Isometry3d readMountFromParams(const std::string& params_yaml);
 
 /// CameraInfo of a rectified pinhole camera (plumb_bob, zero distortion, R = I, P = [K | 0]);
 /// focal lengths and principal point in pixels.

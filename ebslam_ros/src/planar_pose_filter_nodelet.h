@@ -1,20 +1,13 @@
 #pragma once
-// The ROS side shared by the EventParticleFilter and EventSlam2d nodelets (not a nodelet): input
-// checks, optional denoising, the filter's life cycle and the outputs (pose, path, particles, tf,
-// diagnostics, dynamic_reconfigure). Frames (REP 105): map -> odom -> base_link -> sensor_frame;
-// the core estimates the planar pose of the sensor's optical frame (z up to the ceiling). Outputs
-// carry the time of their last event. Details: docs/ros_nodes_notes.md#pose-filter-nodelets
+// The planar pose filters' nodelet (EventParticleFilter, EventSlam2d) on PoseFilterNodeletBase:
+// an upward-looking eDVS (its optical axis within 10 degrees of base_link's z) whose events
+// (ebslam_msgs/EventArray) drive a core filter with planar particles; the optional denoiser, the
+// `reset` service (ebslam_msgs/ResetPose) and the filter knobs (EventFilterKnobs.cfg). The core
+// estimates the planar pose of the sensor's optical frame (z up to the ceiling).
 
-#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/EventArray.h>
 #include <ebslam_msgs/ResetPose.h>
-#include <geometry_msgs/PoseStamped.h>
-#include <ros/ros.h>
-#include <tf2/LinearMath/Transform.h>
-#include <tf2_ros/static_transform_broadcaster.h>
-#include <tf2_ros/transform_broadcaster.h>
-#include <tf2_ros/transform_listener.h>
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <ebslam/event_denoiser.h>
@@ -22,21 +15,19 @@
 #include <ebslam/particles2d.h>
 
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 
 #include "ebslam_ros/EventFilterKnobsConfig.h"
 #include "ebslam_ros/event_input.h"
-#include "ebslam_ros/log_throttle.h"
-#include "ebslam_ros/ros_params.h"
+#include "pose_filter_nodelet_base.h"
+#include "pose_filter_params.h"
 
 namespace ebslam_ros {
 
-/// What PoseFilterNode needs of a core filter (EventParticleFilter, EventSlam2d).
+/// What PlanarPoseFilterNodelet needs of a core filter (EventParticleFilter, EventSlam2d).
 class PoseFilterBackend {
  public:
   virtual ~PoseFilterBackend() = default;
@@ -57,34 +48,33 @@ ebslam::Pose2 inverse(const ebslam::Pose2& p);
 /// axis points up (within 10 degrees).
 ebslam::Pose2 planarMount(const tf2::Transform& base_to_sensor);
 
-class PoseFilterNode {
+class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
  public:
+  ~PlanarPoseFilterNodelet() override;
+
+ protected:
   /// Creates the core filter with the sensor's start pose (map frame) and the filter knobs.
   using Factory = std::function<std::unique_ptr<PoseFilterBackend>(
       const ebslam::Pose2& sensor_start, const ebslam::EventFilterConfig& knobs)>;
+
+  /// Subscribes `events`; advertises pose, path, particles, the `reset` service,
+  /// dynamic_reconfigure and diagnostics. Call from onInit().
+  void startFilter(PoseFilterNodeConfig config, ebslam::EventFilterConfig knobs, Factory factory);
   /// Runs after every filter update (mutex held), before its pose is published: the SLAM
   /// nodelet publishes its map from here.
-  using AfterUpdate = std::function<void(const PoseFilterBackend& filter, const ros::Time& stamp)>;
-
-  /// Subscribes `events` in `nh`; advertises pose, path, particles, the `reset` service,
-  /// dynamic_reconfigure and diagnostics (private names in `private_nh`). `name` names the
-  /// diagnostics task.
-  PoseFilterNode(ros::NodeHandle nh, ros::NodeHandle private_nh, PoseFilterNodeConfig config,
-                 ebslam::EventFilterConfig knobs, Factory factory, std::string name);
-
-  void setAfterUpdate(AfterUpdate after_update) { after_update_ = std::move(after_update); }
-  /// The filter's state is guarded by this mutex; hold it to read the backend.
-  std::mutex& mutex() { return mutex_; }
-  /// nullptr until the first events arrived with the mounting known.
+  virtual void afterUpdate(const PoseFilterBackend& /*filter*/, const ros::Time& /*stamp*/) {}
+  /// nullptr until the first events arrived with the mounting known; hold mutex() to read it.
   const PoseFilterBackend* backend() const { return backend_.get(); }
-  const PoseFilterNodeConfig& config() const { return config_; }
 
  private:
   void onEvents(const ebslam_msgs::EventArray::ConstPtr& msg);
+  /// The guard's checks of a message (size, pixels, time) as counts and throttled logs; false:
+  /// the message is dropped.
+  bool checkInput(const ebslam_msgs::EventArray& msg, const EventInputResult& input);
+  void processSegment(EventSegment& segment);
   bool onReset(ebslam_msgs::ResetPose::Request& request,
                ebslam_msgs::ResetPose::Response& response);
   void onReconfigure(EventFilterKnobsConfig& knobs, std::uint32_t level);
-  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   /// Mounting from parameters or tf; false (and a throttled warning) while tf lacks it.
   bool resolveMount();
   void restart(const ebslam::Pose2& base_pose);
@@ -93,46 +83,32 @@ class PoseFilterNode {
   /// activity).
   void makeDenoiser();
 
+  bool mountKnown() const override { return mount_.has_value(); }
+  bool filterRunning() const override { return backend_ != nullptr; }
+  std::uint64_t processedEvents() const override {
+    return backend_ ? backend_->processedEvents() : 0;
+  }
+  void diagnoseInput(diagnostic_updater::DiagnosticStatusWrapper& status) const override;
+  void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& status) const override;
+
   PoseFilterNodeConfig config_;
   ebslam::EventFilterConfig knobs_;
   Factory factory_;
-  AfterUpdate after_update_;
-  std::string name_;
-  ros::NodeHandle nh_, private_nh_;
-  std::mutex mutex_;
 
   std::unique_ptr<PoseFilterBackend> backend_;
   ebslam::Pose2 start_pose_;  // base_link in map at the next (re)start
   std::optional<ebslam::Pose2> mount_;
-  EventInputGuard guard_;
+  std::optional<EventInputGuard> guard_;
   /// ~denoise: the background-activity filter between the guard and the pose filter.
   std::optional<ebslam::BackgroundActivityFilter> denoiser_;
 
   ros::Subscriber events_sub_;
-  ros::Publisher pose_pub_, path_pub_, particles_pub_;
   ros::ServiceServer reset_srv_;
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
-  tf2_ros::TransformBroadcaster tf_broadcaster_;
-  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   std::unique_ptr<dynamic_reconfigure::Server<EventFilterKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
-  diagnostic_updater::Updater diagnostics_;
-  ros::WallTimer diagnostics_timer_;
 
-  std::deque<geometry_msgs::PoseStamped> path_;
-  ros::WallTime last_path_publication_;
-
-  // Counters for diagnostics (since start).
-  std::uint64_t messages_ = 0, events_in_ = 0, empty_messages_ = 0, rejected_size_ = 0,
-                rejected_frame_ = 0, outside_ = 0, clamped_ = 0, restarts_ = 0, gaps_ = 0,
-                zero_time_ = 0, waiting_for_mount_ = 0, filter_errors_ = 0, denoiser_passed_ = 0,
-                denoiser_removed_ = 0;
-  std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
-  // Per-message problems, logged at most every 5 s of wall time.
-  WallThrottle restart_log_{5.0}, gap_log_{5.0}, zero_time_log_{5.0};
-  double processing_s_ = 0.0;
-  double last_latency_s_ = 0.0;
+  // Counters of this input for diagnostics (since start).
+  std::uint64_t rejected_size_ = 0, outside_ = 0, denoiser_passed_ = 0, denoiser_removed_ = 0;
 };
 
 }  // namespace ebslam_ros

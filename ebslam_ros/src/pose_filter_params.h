@@ -1,0 +1,34 @@
+#pragma once
+// The parameters the planar pose filters share (EventParticleFilter, EventSlam2d): the
+// upward-looking eDVS, the start pose, the optional denoiser and the event filter's knobs.
+
+#include <ros/node_handle.h>
+
+#include <ebslam/event_denoiser.h>
+#include <ebslam/event_filter.h>
+#include <ebslam/particles2d.h>
+
+#include "ceiling_sensor_params.h"
+#include "pose_node_params.h"
+
+namespace ebslam_ros {
+
+/// ROS side of EventParticleFilter and EventSlam2d (frames, mounting, output, input checks in
+/// PoseNodeConfig).
+struct PoseFilterNodeConfig : PoseNodeConfig {
+  CeilingSensorConfig sensor;
+  ebslam::Pose2 initial_pose;  ///< ~initial_pose: base_link in map [m, m, rad]
+  /// ~denoise: run the background-activity filter on the events before the pose filter (no
+  /// topic hop); its parameters under ~denoiser/ (loadBackgroundActivityFilterConfig).
+  bool denoise = false;
+  ebslam::BackgroundActivityFilterConfig denoiser;
+};
+PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& private_nh);
+
+/// Common filter knobs (~num_particles, ~batch_size, ~resample_every, ~beta, ~g0, ~initial_spread,
+/// ~initial_spread_rad, ~estimate (mean|best), ~latency_compensation, ~seed; into `experimental`:
+/// ~diffusion_scale, ~reset_scores_on_resample, ~adapt_g0) over `defaults`.
+ebslam::EventFilterConfig loadEventFilterConfig(const ros::NodeHandle& private_nh,
+                                                const ebslam::EventFilterConfig& defaults);
+
+}  // namespace ebslam_ros
