@@ -546,9 +546,9 @@ class EventSlam3dNodelet : public nodelet::Nodelet {
       status.summary(DiagnosticStatus::WARN, "bad input since the last report (see the log)");
     } else if (!slam_) {
       status.summary(DiagnosticStatus::OK, "waiting for events");
-    } else if (slam_->health().state == ebslam::TrackingState3d::kLost) {
+    } else if (slam_->health().state == ebslam::TrackingState::kLost) {
       status.summary(DiagnosticStatus::WARN, "lost: the events stopped fitting the map");
-    } else if (slam_->health().state == ebslam::TrackingState3d::kRecovering) {
+    } else if (slam_->health().state == ebslam::TrackingState::kRecovering) {
       status.summary(DiagnosticStatus::WARN, "recovering: the events fit the map again");
     } else {
       status.summary(DiagnosticStatus::OK, "tracking");

@@ -18,17 +18,6 @@
 
 namespace ebslam_ros {
 
-ebslam::Pose2 compose(const ebslam::Pose2& a, const ebslam::Pose2& b) {
-  const double c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y,
-          std::remainder(a.theta + b.theta, 2.0 * M_PI)};
-}
-
-ebslam::Pose2 inverse(const ebslam::Pose2& p) {
-  const double c = std::cos(p.theta), s = std::sin(p.theta);
-  return {-c * p.x - s * p.y, s * p.x - c * p.y, -p.theta};
-}
-
 ebslam::Pose2 planarMount(const tf2::Transform& base_to_sensor) {
   const tf2::Matrix3x3& r = base_to_sensor.getBasis();
   // Column 2 is the optical axis in base_link; the filters assume it points straight up.

@@ -23,7 +23,7 @@
 #include <ebslam/event_denoiser.h>
 #include <ebslam/event_io.h>
 #include <ebslam/exploration.h>
-#include <ebslam/particles2d.h>
+#include <ebslam/particle_set2d.h>
 #include <ebslam/simulator.h>
 #include <ebslam/simulator_scenes.h>
 
