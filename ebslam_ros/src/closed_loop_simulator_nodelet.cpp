@@ -148,11 +148,11 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   }
 
   // Room frame -> ~map_frame (origin at the start pose).
-  Eigen::Vector3d toMap(const Eigen::Vector3d& room) const {
-    const Eigen::Vector3d& s = plan_.start;
-    const double c = std::cos(s.z()), n = std::sin(s.z());
-    const double dx = room.x() - s.x(), dy = room.y() - s.y();
-    return {c * dx + n * dy, -n * dx + c * dy, std::remainder(room.z() - s.z(), 2.0 * M_PI)};
+  ebslam::Pose2 toMap(const ebslam::Pose2& room) const {
+    const ebslam::Pose2& s = plan_.start;
+    const double c = std::cos(s.theta), n = std::sin(s.theta);
+    const double dx = room.x - s.x, dy = room.y - s.y;
+    return {c * dx + n * dy, -n * dx + c * dy, std::remainder(room.theta - s.theta, 2.0 * M_PI)};
   }
 
   void run() {
@@ -251,11 +251,11 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
   }
 
   void publishGroundTruth(const ros::Time& stamp) {
-    const Eigen::Vector3d p = toMap(simulator_->pose());
+    const ebslam::Pose2 p = toMap(simulator_->pose());
     const ros::WallTime now = ros::WallTime::now();
     const bool path_due = (now - last_path_).toSec() >= 1.0;
     if (path_due) last_path_ = now;
-    ground_truth_->publish(ebslam::se2ToFloorPose(0.0, p.x(), p.y(), p.z()), stamp, path_due);
+    ground_truth_->publish(ebslam::se2ToFloorPose(0.0, p.x, p.y, p.theta), stamp, path_due);
   }
 
   void publishFloorPlan(const ros::Time& stamp) {
@@ -271,10 +271,10 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
     const auto add = [&](const ebslam::Polygon2& polygon) {
       for (std::size_t i = 0; i < polygon.size(); ++i) {
         for (const Eigen::Vector2d& v : {polygon[i], polygon[(i + 1) % polygon.size()]}) {
-          const Eigen::Vector3d q = toMap({v.x(), v.y(), 0.0});
+          const ebslam::Pose2 q = toMap({v.x(), v.y(), 0.0});
           geometry_msgs::Point p;
-          p.x = q.x();
-          p.y = q.y();
+          p.x = q.x;
+          p.y = q.y;
           m.points.push_back(p);
         }
       }

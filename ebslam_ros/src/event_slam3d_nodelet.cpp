@@ -372,11 +372,11 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
 
   bool diagnoseTracking(diagnostic_updater::DiagnosticStatusWrapper& status) const override {
     using diagnostic_msgs::DiagnosticStatus;
-    if (slam_->health().state == ebslam::TrackingState3d::kLost) {
+    if (slam_->health().state == ebslam::TrackingState::kLost) {
       status.summary(DiagnosticStatus::WARN, "lost: the events stopped fitting the map");
       return true;
     }
-    if (slam_->health().state == ebslam::TrackingState3d::kRecovering) {
+    if (slam_->health().state == ebslam::TrackingState::kRecovering) {
       status.summary(DiagnosticStatus::WARN, "recovering: the events fit the map again");
       return true;
     }

@@ -4,7 +4,7 @@
 #include <ros/node_handle.h>
 
 #include <ebslam/exploration.h>
-#include <ebslam/particles2d.h>
+#include <ebslam/pose.h>
 
 #include <optional>
 #include <string>

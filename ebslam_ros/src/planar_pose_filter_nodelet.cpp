@@ -15,17 +15,6 @@
 
 namespace ebslam_ros {
 
-ebslam::Pose2 compose(const ebslam::Pose2& a, const ebslam::Pose2& b) {
-  const double c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y,
-          std::remainder(a.theta + b.theta, 2.0 * M_PI)};
-}
-
-ebslam::Pose2 inverse(const ebslam::Pose2& p) {
-  const double c = std::cos(p.theta), s = std::sin(p.theta);
-  return {-c * p.x - s * p.y, s * p.x - c * p.y, -p.theta};
-}
-
 ebslam::Pose2 planarMount(const tf2::Transform& base_to_sensor) {
   const tf2::Matrix3x3& r = base_to_sensor.getBasis();
   // Column 2 is the optical axis in base_link; the filters assume it points straight up.
@@ -113,7 +102,7 @@ void PlanarPoseFilterNodelet::makeDenoiser() {
 }
 
 void PlanarPoseFilterNodelet::restart(const ebslam::Pose2& base_pose) {
-  backend_ = factory_(compose(base_pose, *mount_), knobs_);
+  backend_ = factory_(ebslam::compose(base_pose, *mount_), knobs_);
   clearPath();
 }
 
@@ -192,8 +181,8 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
 void PlanarPoseFilterNodelet::publish(const ros::Time& stamp) {
   // Maps first: a node that acts on the pose (the explorer) then has the maps of the same events.
   afterUpdate(*backend_, stamp);
-  const ebslam::Pose2 mount_inverse = inverse(*mount_);
-  const ebslam::Pose2 base = compose(backend_->estimate(), mount_inverse);
+  const ebslam::Pose2 mount_inverse = ebslam::inverse(*mount_);
+  const ebslam::Pose2 base = ebslam::compose(backend_->estimate(), mount_inverse);
 
   // Covariance of base_link's (x, y, yaw) over the particles, score-weighted; headings as
   // differences to the estimate, wrapped.
@@ -201,7 +190,7 @@ void PlanarPoseFilterNodelet::publish(const ros::Time& stamp) {
   double cxx = 0, cxy = 0, cyy = 0, cxt = 0, cyt = 0, ctt = 0;
   for (int i = 0; i < particles.size(); ++i) {
     const double w = particles.size() == 1 ? 1.0 : particles.normalisedWeight(i);
-    const ebslam::Pose2 p = compose(particles.particle(i), mount_inverse);
+    const ebslam::Pose2 p = ebslam::compose(particles.particle(i), mount_inverse);
     const double dx = p.x - base.x, dy = p.y - base.y;
     const double dt = std::remainder(p.theta - base.theta, 2.0 * M_PI);
     cxx += w * dx * dx;
@@ -222,7 +211,7 @@ void PlanarPoseFilterNodelet::publish(const ros::Time& stamp) {
     std::vector<geometry_msgs::Pose> poses;
     poses.reserve(static_cast<std::size_t>(particles.size()));
     for (int i = 0; i < particles.size(); ++i) {
-      poses.push_back(toPoseMsg(compose(particles.particle(i), mount_inverse)));
+      poses.push_back(toPoseMsg(ebslam::compose(particles.particle(i), mount_inverse)));
     }
     return poses;
   });

@@ -12,7 +12,8 @@
 
 #include <ebslam/event_denoiser.h>
 #include <ebslam/event_filter.h>
-#include <ebslam/particles2d.h>
+#include <ebslam/particle_set2d.h>
+#include <ebslam/pose.h>
 
 #include <cstdint>
 #include <functional>
@@ -41,9 +42,6 @@ class PoseFilterBackend {
   virtual std::uint64_t processedEvents() const = 0;
 };
 
-/// Planar rigid motion (x, y [m], theta [rad]): a ∘ b = a applied after b.
-ebslam::Pose2 compose(const ebslam::Pose2& a, const ebslam::Pose2& b);
-ebslam::Pose2 inverse(const ebslam::Pose2& p);
 /// Planar part of base_link -> sensor; throws std::invalid_argument unless the sensor's optical
 /// axis points up (within 10 degrees).
 ebslam::Pose2 planarMount(const tf2::Transform& base_to_sensor);

@@ -6,7 +6,7 @@
 
 #include <ebslam/event_denoiser.h>
 #include <ebslam/event_filter.h>
-#include <ebslam/particles2d.h>
+#include <ebslam/pose.h>
 
 #include "ceiling_sensor_params.h"
 #include "pose_node_params.h"

@@ -45,9 +45,9 @@ TEST(ExplorationLoop, CoverageAndLocalisationAsOffline) {
   const ebslam::FloorPlan plan = ebslam::readFloorPlan(plan_path, robot_radius_m);
   ebslam::CoverageRaster coverage(plan, robot_radius_m, 0.02);
   // ~map_frame of the simulator lies at plan.start: map -> room.
-  const double c = std::cos(plan.start.z()), s = std::sin(plan.start.z());
+  const double c = std::cos(plan.start.theta), s = std::sin(plan.start.theta);
   const auto toRoom = [&](double x, double y) {
-    return Eigen::Vector2d(plan.start.x() + c * x - s * y, plan.start.y() + s * x + c * y);
+    return Eigen::Vector2d(plan.start.x + c * x - s * y, plan.start.y + s * x + c * y);
   };
   ebslam::Trajectory truth, estimate;
   const auto push = [](ebslam::Trajectory& t, const ebslam::StampedPose& p) {

@@ -15,8 +15,7 @@
 #include <std_msgs/Header.h>
 #include <tf2/LinearMath/Transform.h>
 
-#include <ebslam/ebslam3d.h>
-#include <ebslam/particles2d.h>
+#include <ebslam/pose.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "ebslam/pose.h"
+
 namespace ebslam {
 namespace {
 
@@ -15,16 +17,14 @@ void require(bool condition, const std::string& message) {
   if (!condition) throw std::invalid_argument(message);
 }
 
-double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
-
 double approach(double current, double target, double max_change) {
   return current + std::clamp(target - current, -max_change, max_change);
 }
 
-Eigen::Isometry3d cameraPose(const Eigen::Vector3d& pose) {
+Eigen::Isometry3d cameraPose(const Pose2& pose) {
   Eigen::Isometry3d camera = Eigen::Isometry3d::Identity();
-  camera.linear() = Eigen::AngleAxisd(pose.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  camera.translation() = Eigen::Vector3d(pose.x(), pose.y(), 0.0);
+  camera.linear() = Eigen::AngleAxisd(pose.theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  camera.translation() = Eigen::Vector3d(pose.x, pose.y, 0.0);
   return camera;
 }
 
@@ -98,10 +98,10 @@ ClosedLoopSimulator::ClosedLoopSimulator(const FloorPlan& plan,
       scene_(makeRoomCeilingScene(plan_, config_)),
       stream_(config_.events, scene_, cameraPose(plan_.start), 0.0),
       pose_(plan_.start) {
-  require(fits(pose_.head<2>()),
+  require(fits(Eigen::Vector2d(pose_.x, pose_.y)),
           "ClosedLoopSimulator: the robot does not fit at the floor plan's start pose");
-  pose_.z() = wrapAngle(pose_.z());
-  ground_truth_.push_back(se2ToFloorPose(0.0, pose_.x(), pose_.y(), pose_.z()));
+  pose_.theta = wrapAngle(pose_.theta);
+  ground_truth_.push_back(se2ToFloorPose(0.0, pose_.x, pose_.y, pose_.theta));
   next_ground_truth_s_ = 1.0 / config_.ground_truth_rate_hz;
 }
 
@@ -115,7 +115,7 @@ BumpReading ClosedLoopSimulator::readBumpRing(const Eigen::Vector2d& push_direct
   reading.segment_count = config_.robot.bump_segments;
   if (push_direction_world.squaredNorm() == 0.0) return reading;
   const DiffDriveConfig& robot = config_.robot;
-  const Eigen::Vector2d centre = pose_.head<2>();
+  const Eigen::Vector2d centre(pose_.x, pose_.y);
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& q :
        plan_.boundaryPointsWithin(centre, robot.radius_m + robot.contact_tolerance_m)) {
@@ -123,7 +123,7 @@ BumpReading ClosedLoopSimulator::readBumpRing(const Eigen::Vector2d& push_direct
     if (to_contact.squaredNorm() == 0.0) continue;
     const Eigen::Vector2d unit = to_contact.normalized();
     if (unit.dot(push_direction_world) <= 0.0) continue;  // not pushed against this contact
-    const double direction = wrapAngle(std::atan2(unit.y(), unit.x()) - pose_.z());
+    const double direction = wrapAngle(std::atan2(unit.y(), unit.x()) - pose_.theta);
     const double sector = 2.0 * kPi / robot.bump_segments;
     const int k = static_cast<int>(std::lround(direction / sector) + robot.bump_segments) %
                   robot.bump_segments;
@@ -150,10 +150,10 @@ BumpReading ClosedLoopSimulator::step(const VelocityCommand& command, double dt_
     velocity_.v_mps = approach(velocity_.v_mps, target_v, robot.max_acceleration_mps2 * h);
     velocity_.omega_rps =
         approach(velocity_.omega_rps, target_omega, robot.max_angular_acceleration_rps2 * h);
-    const double theta_mid = pose_.z() + 0.5 * velocity_.omega_rps * h;
+    const double theta_mid = pose_.theta + 0.5 * velocity_.omega_rps * h;
     const Eigen::Vector2d delta =
         velocity_.v_mps * h * Eigen::Vector2d(std::cos(theta_mid), std::sin(theta_mid));
-    Eigen::Vector2d position = pose_.head<2>();
+    Eigen::Vector2d position(pose_.x, pose_.y);
     if (fits(position + delta)) {
       position += delta;
     } else {
@@ -168,22 +168,21 @@ BumpReading ClosedLoopSimulator::step(const VelocityCommand& command, double dt_
       position += lo * delta;
       velocity_.v_mps = 0.0;
     }
-    pose_ =
-        Eigen::Vector3d(position.x(), position.y(), wrapAngle(pose_.z() + velocity_.omega_rps * h));
+    pose_ = Pose2{position.x(), position.y(), wrapAngle(pose_.theta + velocity_.omega_rps * h)};
     const double t1 = i + 1 == substeps ? t_end : t_s_ + h;
     if (config_.simulate_events) stream_.moveTo(cameraPose(pose_), t1, events);
     t_s_ = t1;
     while (next_ground_truth_s_ <= t_s_ + 1e-12) {
       // Record the pose at the sub-step end that reaches the ground-truth time (sub-steps are
       // much shorter than the recording period).
-      ground_truth_.push_back(se2ToFloorPose(t_s_, pose_.x(), pose_.y(), pose_.z()));
+      ground_truth_.push_back(se2ToFloorPose(t_s_, pose_.x, pose_.y, pose_.theta));
       next_ground_truth_s_ += 1.0 / config_.ground_truth_rate_hz;
     }
   }
   Eigen::Vector2d push = Eigen::Vector2d::Zero();
   if (target_v != 0.0) {
-    push =
-        Eigen::Vector2d(std::cos(pose_.z()), std::sin(pose_.z())) * (target_v > 0.0 ? 1.0 : -1.0);
+    push = Eigen::Vector2d(std::cos(pose_.theta), std::sin(pose_.theta)) *
+           (target_v > 0.0 ? 1.0 : -1.0);
   }
   const BumpReading reading = readBumpRing(push);
   if (reading.contact()) ++bump_steps_;

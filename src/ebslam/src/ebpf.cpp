@@ -89,24 +89,15 @@ void EventParticleFilter::setFilterConfig(const EventFilterConfig& filter) {
   EbpfConfig next = config_;
   next.filter = filter;
   next.validate();
-  const Pose2 current = rawEstimate();
-  const bool count_changed = filter.num_particles != config_.filter.num_particles;
-  const double g0 = filter.experimental.adapt_g0 && config_.filter.experimental.adapt_g0
-                        ? schedule_.g0
-                        : filter.g0;
+  const double g0 =
+      switchFilterConfig(config_.filter, filter, schedule_, rawEstimate(), particles_);
   config_ = next;
   setG0(g0);
-  if (count_changed) {
-    particles_.reset(filter.num_particles, current, filter.initial_spread_m,
-                     filter.initial_spread_rad, 1.0, filter.seed);
-  }
 }
 
 void EventParticleFilter::process(const Event* events, std::size_t count) {
   if (count == 0) return;
-  std::int64_t t = last_t_us_;
-  validateEvents(events, count, camera_.width(), camera_.height(), t);
-  last_t_us_ = t;
+  validateEvents(events, count, camera_.width(), camera_.height(), last_t_us_);
 
   const EventFilterConfig& f = config_.filter;
   localiseInBatches(

@@ -77,6 +77,15 @@ EventSlam2d::EventSlam2d(const Ebslam2dConfig& config, const CeilingCamera& came
   last_normalised_ = expected_;
 }
 
+void EventSlam2d::setFilterConfig(const EventFilterConfig& filter) {
+  Ebslam2dConfig next = config_;
+  next.filter = filter;
+  next.validate();
+  const double g0 = switchFilterConfig(config_.filter, filter, schedule_, estimate(), particles_);
+  config_ = next;
+  setG0(g0);
+}
+
 void EventSlam2d::setG0(double g0) {
   const double signal_fraction = schedule_.signal_fraction;
   schedule_ = makeG0Schedule(config_.filter, camera_, g0);
@@ -109,28 +118,9 @@ void EventSlam2d::updateSignalFraction(int events, std::int64_t t_us) {
   rate_window_events_ = 0;
 }
 
-void EventSlam2d::setFilterConfig(const EventFilterConfig& filter) {
-  Ebslam2dConfig next = config_;
-  next.filter = filter;
-  next.validate();
-  const Pose2 current = estimate();
-  const bool count_changed = filter.num_particles != config_.filter.num_particles;
-  const double g0 = filter.experimental.adapt_g0 && config_.filter.experimental.adapt_g0
-                        ? schedule_.g0
-                        : filter.g0;
-  config_ = next;
-  setG0(g0);
-  if (count_changed) {
-    particles_.reset(filter.num_particles, current, filter.initial_spread_m,
-                     filter.initial_spread_rad, 1.0, filter.seed);
-  }
-}
-
 void EventSlam2d::process(const Event* events, std::size_t count) {
   if (count == 0) return;
-  std::int64_t t = last_t_us_;
-  validateEvents(events, count, camera_.width(), camera_.height(), t);
-  last_t_us_ = t;
+  validateEvents(events, count, camera_.width(), camera_.height(), last_t_us_);
 
   const EventFilterConfig& f = config_.filter;
   // Localisation: EB-PF steps against the current map M (alg. 8, "update particles"), then

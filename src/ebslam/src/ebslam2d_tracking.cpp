@@ -61,16 +61,6 @@ void TrackingMonitorConfig::validate() const {
   if (footprint_stride_px < 1) fail("footprint_stride_px must be >= 1");
 }
 
-const char* toString(TrackingState state) {
-  switch (state) {
-    case TrackingState::kTracking:
-      return "tracking";
-    case TrackingState::kLost:
-      return "lost";
-  }
-  return "unknown";
-}
-
 TrackingMonitor::TrackingMonitor(const TrackingMonitorConfig& config, const CeilingCamera& camera)
     : config_(config), camera_(camera) {
   config_.validate();

@@ -9,18 +9,6 @@
 
 namespace ebslam {
 
-const char* toString(TrackingState3d state) {
-  switch (state) {
-    case TrackingState3d::kTracking:
-      return "tracking";
-    case TrackingState3d::kLost:
-      return "lost";
-    case TrackingState3d::kRecovering:
-      return "recovering";
-  }
-  return "unknown";
-}
-
 Ebslam3dConfig Ebslam3dConfig::fast() {
   Ebslam3dConfig c;
   c.num_particles = 50;
@@ -539,33 +527,33 @@ void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
   } else {
     h.fit_fast += (1.0 - std::exp(-dt_s / c.fast_time_s)) * (fit - h.fit_fast);
     // Frozen unless tracking: the reference is how well the events fitted while on track.
-    if (h.state == TrackingState3d::kTracking) {
+    if (h.state == TrackingState::kTracking) {
       h.fit_slow += (1.0 - std::exp(-dt_s / c.slow_time_s)) * (h.fit_fast - h.fit_slow);
     }
   }
   h.fit_ratio = h.fit_slow > 0.0 ? h.fit_fast / h.fit_slow : 1.0;
-  if (h.state == TrackingState3d::kLost) h.time_lost_s += dt_s;
+  if (h.state == TrackingState::kLost) h.time_lost_s += dt_s;
   if (1e-6 * static_cast<double>(batch_end_us_ - health_start_us_) < c.warmup_s) return;
   switch (h.state) {
-    case TrackingState3d::kTracking:
+    case TrackingState::kTracking:
       if (h.fit_ratio < c.lost_ratio) {
-        h.state = TrackingState3d::kLost;
+        h.state = TrackingState::kLost;
         ++h.lost_count;
       }
       break;
-    case TrackingState3d::kLost:
+    case TrackingState::kLost:
       if (h.fit_ratio >= c.recover_ratio) {
-        h.state = TrackingState3d::kRecovering;
+        h.state = TrackingState::kRecovering;
         above_recover_s_ = 0.0;
       }
       break;
-    case TrackingState3d::kRecovering:
+    case TrackingState::kRecovering:
       if (h.fit_ratio < c.lost_ratio) {
-        h.state = TrackingState3d::kLost;
+        h.state = TrackingState::kLost;
         ++h.lost_count;
       } else if (h.fit_ratio >= c.recover_ratio) {
         above_recover_s_ += dt_s;
-        if (above_recover_s_ >= c.recover_hold_s) h.state = TrackingState3d::kTracking;
+        if (above_recover_s_ >= c.recover_hold_s) h.state = TrackingState::kTracking;
       } else {
         above_recover_s_ = 0.0;
       }

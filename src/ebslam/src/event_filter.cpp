@@ -101,4 +101,14 @@ double G0Tracker::update(std::uint64_t events, const Pose2& estimate) {
   return std::clamp(smoothed_ / divisor_, min_, max_);
 }
 
+double switchFilterConfig(const EventFilterConfig& previous, const EventFilterConfig& next,
+                          const G0Schedule& schedule, const Pose2& current,
+                          ParticleSet2D& particles) {
+  if (next.num_particles != previous.num_particles) {
+    particles.reset(next.num_particles, current, next.initial_spread_m, next.initial_spread_rad,
+                    1.0, next.seed);
+  }
+  return next.experimental.adapt_g0 && previous.experimental.adapt_g0 ? schedule.g0 : next.g0;
+}
+
 }  // namespace ebslam

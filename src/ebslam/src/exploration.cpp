@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ebslam/pose.h"
+
 namespace ebslam {
 namespace {
 
@@ -16,8 +18,6 @@ constexpr double kPi = 3.14159265358979323846;
 void require(bool condition, const std::string& message) {
   if (!condition) throw std::invalid_argument(message);
 }
-
-double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 // Odd-row offset neighbours, counter-clockwise from +x: (dc, dr) for even and odd rows.
 constexpr int kEvenRow[6][2] = {{1, 0}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}};

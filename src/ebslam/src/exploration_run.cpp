@@ -36,7 +36,8 @@ CoverageRaster::CoverageRaster(const FloorPlan& plan, double robot_radius_m, dou
       if (plan.discFits(p, radius_)) centres.at<std::uint8_t>(r, c) = 255;
     }
   }
-  const Eigen::Vector2d start = (plan.start.head<2>() - origin_) / resolution_;
+  const Eigen::Vector2d start =
+      (Eigen::Vector2d(plan.start.x, plan.start.y) - origin_) / resolution_;
   cv::Point seed(std::clamp(static_cast<int>(start.x()), 0, cols - 1),
                  std::clamp(static_cast<int>(start.y()), 0, rows - 1));
   cv::Mat connected(rows + 2, cols + 2, CV_8UC1, cv::Scalar(0));
@@ -85,7 +86,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
   sim_config.seed = config.seed;
   if (config.random_baseline) sim_config.simulate_events = false;
   ClosedLoopSimulator simulator(plan, sim_config);
-  const Pose2 start{plan.start.x(), plan.start.y(), plan.start.z()};
+  const Pose2 start = plan.start;
   Ebslam2dConfig slam_config = config.slam;
   slam_config.filter.seed = config.seed;
   std::optional<EventSlam2d> slam;
@@ -110,7 +111,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
 
   ExplorationRunResult result;
   result.reachable_area_m2 = coverage.reachableArea();
-  coverage.cover(simulator.pose().head<2>());
+  coverage.cover(Eigen::Vector2d(simulator.pose().x, simulator.pose().y));
   BumpReading bump;
   bool was_contact = false;
   EventVector events;
@@ -132,7 +133,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       }
       if (slam) {
         sample.position_error_m =
-            std::hypot(estimate.x - simulator.pose().x(), estimate.y - simulator.pose().y());
+            std::hypot(estimate.x - simulator.pose().x, estimate.y - simulator.pose().y);
       }
       if (sample.covered >= 0.9 && result.time_to_90_s < 0.0) result.time_to_90_s = t;
       result.samples.push_back(sample);
@@ -173,7 +174,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
     }
     if (bump.contact() && !was_contact) ++result.bump_events;
     was_contact = bump.contact();
-    coverage.cover(simulator.pose().head<2>());
+    coverage.cover(Eigen::Vector2d(simulator.pose().x, simulator.pose().y));
   }
   result.ground_truth = simulator.groundTruth();
   if (explorer) {

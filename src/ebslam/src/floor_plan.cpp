@@ -95,7 +95,8 @@ void FloorPlan::validate() const {
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     validatePolygon(obstacles[k], "floor plan obstacle " + std::to_string(k));
   }
-  if (!start.allFinite()) throw std::invalid_argument("floor plan: start pose is not finite");
+  if (!std::isfinite(start.x) || !std::isfinite(start.y) || !std::isfinite(start.theta))
+    throw std::invalid_argument("floor plan: start pose is not finite");
 }
 
 double FloorPlan::clearance(const Eigen::Vector2d& p) const {
@@ -210,7 +211,7 @@ FloorPlan parseFloorPlan(const std::string& text, const std::string& source,
     if (first == "start") {
       double x = 0.0, y = 0.0, theta = 0.0;
       if (!(fields >> x >> y >> theta)) fail(line_number, "start needs x y theta");
-      plan.start = Eigen::Vector3d(x, y, theta);
+      plan.start = Pose2{x, y, theta};
       have_start = true;
       continue;
     }
@@ -235,7 +236,7 @@ FloorPlan parseFloorPlan(const std::string& text, const std::string& source,
   } catch (const std::invalid_argument& error) {
     fail(0, error.what());
   }
-  const Eigen::Vector2d start = plan.start.head<2>();
+  const Eigen::Vector2d start(plan.start.x, plan.start.y);
   if (!plan.isFloor(start) || (robot_radius_m > 0.0 && !plan.discFits(start, robot_radius_m))) {
     fail(0,
          "the start pose leaves no room for the robot (outside the walls, inside an "

@@ -42,9 +42,9 @@ float sampleWrapped(const cv::Mat& texture, double u, double v) {
 
 }  // namespace
 
-Eigen::Vector3d floorPoseToSe2(const StampedPose& pose) {
+Pose2 floorPoseToSe2(const StampedPose& pose) {
   const Eigen::Vector3d x_axis = pose.orientation.normalized() * Eigen::Vector3d::UnitX();
-  return Eigen::Vector3d(pose.position.x(), pose.position.y(), std::atan2(x_axis.y(), x_axis.x()));
+  return {pose.position.x(), pose.position.y(), std::atan2(x_axis.y(), x_axis.x())};
 }
 
 StampedPose se2ToFloorPose(double t_s, double x, double y, double theta) {

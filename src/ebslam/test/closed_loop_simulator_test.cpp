@@ -152,20 +152,20 @@ TEST(ClosedLoopSimulator, DrivesIntoAWallStopsAndReportsTheBumpInFront) {
     }
   }
   ASSERT_EQ(bumps, 1);
-  EXPECT_NEAR(sim.pose().y(), 0.15, 0.003);   // touching: centre one radius from the wall
+  EXPECT_NEAR(sim.pose().y, 0.15, 0.003);     // touching: centre one radius from the wall
   EXPECT_NEAR(bump.direction_rad, 0.0, 0.2);  // straight ahead (the wall is almost square)
   EXPECT_TRUE(bump.segments & 1u);            // segment 0 = forward
   EXPECT_GT(events.size(), 1000u);            // the eDVS saw the motion
   // Pushing on does not move it into the wall; backing off is free and reports no contact.
   sim.step({0.3, 0.0}, 0.5, events);
-  EXPECT_GE(sim.pose().y(), 0.15 - 1e-9);
+  EXPECT_GE(sim.pose().y, 0.15 - 1e-9);
   bump = sim.step({-0.2, 0.0}, 0.5, events);
   EXPECT_FALSE(bump.contact());
-  EXPECT_GT(sim.pose().y(), 0.2);
+  EXPECT_GT(sim.pose().y, 0.2);
   // Turning in place at a wall is always possible (disc robot).
-  const double theta = sim.pose().z();
+  const double theta = sim.pose().theta;
   sim.step({0.0, 1.0}, 0.5, events);
-  EXPECT_GT(std::abs(sim.pose().z() - theta), 0.2);
+  EXPECT_GT(std::abs(sim.pose().theta - theta), 0.2);
 }
 
 TEST(ClosedLoopSimulator, RespectsSpeedAndTurnLimits) {
@@ -177,9 +177,10 @@ TEST(ClosedLoopSimulator, RespectsSpeedAndTurnLimits) {
   EXPECT_NEAR(sim.velocity().v_mps, config.robot.max_speed_mps, 1e-12);
   EXPECT_NEAR(sim.velocity().omega_rps, config.robot.max_turn_rate_rps, 1e-12);
   EXPECT_TRUE(events.empty());
-  const Eigen::Vector3d before = sim.pose();
+  const Pose2 before = sim.pose();
   sim.step({5.0, 0.0}, 0.1, events);
-  EXPECT_LE((sim.pose() - before).head<2>().norm(), config.robot.max_speed_mps * 0.1 + 1e-9);
+  EXPECT_LE(std::hypot(sim.pose().x - before.x, sim.pose().y - before.y),
+            config.robot.max_speed_mps * 0.1 + 1e-9);
   EXPECT_THROW(sim.step({NAN, 0.0}, 0.1, events), std::invalid_argument);
   EXPECT_THROW(sim.step({0.0, 0.0}, 0.0, events), std::invalid_argument);
 }

@@ -205,7 +205,7 @@ TEST(Ebslam3dConfig, ValidatesAndPresets) {
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.sigma_position_per_sqrt_s = -0.1; })),
                std::invalid_argument);
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.health.lost_ratio = 0.9; })), std::invalid_argument);
-  EXPECT_STREQ(toString(TrackingState3d::kLost), "lost");
+  EXPECT_STREQ(toString(TrackingState::kLost), "lost");
 }
 
 // Pure diffusion: with K beyond the run no resampling happens, so every particle is a random walk
@@ -381,18 +381,18 @@ TEST(EventSlam3d, TrackingHealthDetectsLossAndRecovery) {
     slam.process(events);
   };
   feed(2.0, Eigen::Vector3f::Zero());
-  EXPECT_EQ(slam.health().state, TrackingState3d::kTracking);
+  EXPECT_EQ(slam.health().state, TrackingState::kTracking);
   EXPECT_EQ(slam.health().lost_count, 0u);
   EXPECT_GT(slam.health().fit_ratio, 0.8);
   EXPECT_GT(slam.health().ess_share, 0.5);
   feed(0.3, Eigen::Vector3f(0.5f, 0.3f, 0.2f));
-  EXPECT_EQ(slam.health().state, TrackingState3d::kLost);
+  EXPECT_EQ(slam.health().state, TrackingState::kLost);
   EXPECT_EQ(slam.health().lost_count, 1u);
   EXPECT_LT(slam.health().fit_ratio, c.health.recover_ratio);
   feed(0.2, Eigen::Vector3f::Zero());
-  EXPECT_EQ(slam.health().state, TrackingState3d::kRecovering);
+  EXPECT_EQ(slam.health().state, TrackingState::kRecovering);
   feed(0.6, Eigen::Vector3f::Zero());
-  EXPECT_EQ(slam.health().state, TrackingState3d::kTracking);
+  EXPECT_EQ(slam.health().state, TrackingState::kTracking);
   EXPECT_GT(slam.health().time_lost_s, 0.02);
   slam.reset();
   EXPECT_EQ(slam.health().lost_count, 0u);

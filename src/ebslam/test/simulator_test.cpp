@@ -502,13 +502,13 @@ TEST(FloorRobotTrajectory, ProjectsForwardLookingMocapPosesIntoThePlane) {
   const Trajectory floor = makeFloorRobotTrajectory(mocap, config);
   ASSERT_EQ(floor.size(), mocap.size());
   for (std::size_t i = 0; i < floor.size(); i += 17) {
-    const Eigen::Vector3d se2 = floorPoseToSe2(floor[i]);
+    const Pose2 se2 = floorPoseToSe2(floor[i]);
     const double psi = 3.0 * std::sin(0.5 * mocap[i].t_s);
     EXPECT_NEAR(floor[i].t_s, mocap[i].t_s - 100.0, 1e-9);
-    EXPECT_NEAR(se2.x(), mocap[i].position.x(), 1e-12);
-    EXPECT_NEAR(se2.y(), mocap[i].position.y(), 1e-12);
+    EXPECT_NEAR(se2.x, mocap[i].position.x(), 1e-12);
+    EXPECT_NEAR(se2.y, mocap[i].position.y(), 1e-12);
     EXPECT_NEAR(floor[i].position.z(), 0.0, 1e-12);
-    EXPECT_NEAR(std::remainder(se2.z() - psi, 2.0 * kPi), 0.0, 1e-9);
+    EXPECT_NEAR(std::remainder(se2.theta - psi, 2.0 * kPi), 0.0, 1e-9);
     // Camera looks up.
     EXPECT_NEAR((floor[i].orientation * Eigen::Vector3d::UnitZ()).z(), 1.0, 1e-12);
   }

@@ -17,7 +17,7 @@
 
 #include "ebslam/ceiling_camera.h"
 #include "ebslam/event.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/particle_set2d.h"
 
 namespace ebslam::testing {
 

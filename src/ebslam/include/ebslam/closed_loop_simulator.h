@@ -74,7 +74,7 @@ class ClosedLoopSimulator {
 
   double time() const { return t_s_; }
   /// True robot pose (x, y, theta) in the world frame.
-  Eigen::Vector3d pose() const { return pose_; }
+  Pose2 pose() const { return pose_; }
   /// Current velocity after limits (v [m/s], omega [rad/s]).
   VelocityCommand velocity() const { return velocity_; }
   /// Ground truth (camera -> world, as simulator_scenes.h) at ground_truth_rate_hz.
@@ -94,7 +94,7 @@ class ClosedLoopSimulator {
   Scene scene_;
   EventStream stream_;
   double t_s_ = 0.0;
-  Eigen::Vector3d pose_;
+  Pose2 pose_;
   VelocityCommand velocity_;
   Trajectory ground_truth_;
   double next_ground_truth_s_ = 0.0;

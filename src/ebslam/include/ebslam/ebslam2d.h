@@ -16,7 +16,7 @@
 #include "ebslam/ceiling_camera.h"
 #include "ebslam/event.h"
 #include "ebslam/event_filter.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/particle_set2d.h"
 
 namespace ebslam {
 

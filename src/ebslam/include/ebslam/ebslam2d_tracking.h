@@ -18,7 +18,8 @@
 
 #include "ebslam/ceiling_camera.h"
 #include "ebslam/event.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/particle_set2d.h"
+#include "ebslam/tracking_state.h"
 
 namespace ebslam {
 
@@ -60,12 +61,6 @@ struct TrackingMonitorConfig {
   /// Throws std::invalid_argument naming the offending parameter.
   void validate() const;
 };
-
-enum class TrackingState {
-  kTracking,  ///< the events agree with the map at the estimate
-  kLost,      ///< they have not for lost_after_s: the estimate is not to be trusted
-};
-const char* toString(TrackingState state);
 
 class TrackingMonitor {
  public:

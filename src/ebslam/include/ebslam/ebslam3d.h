@@ -16,7 +16,9 @@
 #include <Eigen/Geometry>
 
 #include "ebslam/exponential_decay.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/fast_normal_generator.h"
+#include "ebslam/pose.h"
+#include "ebslam/tracking_state.h"
 #include "ebslam/voxel_map.h"
 
 namespace ebslam {
@@ -29,26 +31,11 @@ struct PointEvent {
 };
 using PointEventVector = std::vector<PointEvent>;
 
-/// Rigid pose: sensor frame -> map frame.
-struct Pose3 {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();               ///< [m]
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< unit
-};
-
 /// Where events are splatted into the occurrence map.
 enum class MapSplat3d {
   kExpectedPose,  ///< once at p_* (fast; the 2D default)
   kAllParticles,  ///< once per particle, weighted by its normalised score (eq. 8.9)
 };
-
-/// Whether the filter believes it follows the sensor (EventSlam3d::health()).
-enum class TrackingState3d {
-  kTracking,    ///< the events fit the map about as well as they did recently
-  kLost,        ///< the events' fit collapsed (score ratio below lost_ratio)
-  kRecovering,  ///< the fit came back above recover_ratio but not yet for recover_hold_s
-};
-/// "tracking", "lost" or "recovering".
-const char* toString(TrackingState3d state);
 
 /// Thresholds of the tracking state machine. The fit is the best particle's mean map value per
 /// event; it is smoothed over fast_time_s and compared with its slow average over slow_time_s
@@ -64,7 +51,7 @@ struct TrackingHealthConfig {
 
 /// Health of the filter after the last batch.
 struct TrackingHealth {
-  TrackingState3d state = TrackingState3d::kTracking;
+  TrackingState state = TrackingState::kTracking;
   /// Effective sample size of the normalised scores over N, (0, 1].
   double ess_share = 1.0;
   double fit_fast = 0.0;   ///< smoothed best mean map value per event (see TrackingHealthConfig)

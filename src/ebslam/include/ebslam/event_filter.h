@@ -13,7 +13,7 @@
 #include "ebslam/ceiling_camera.h"
 #include "ebslam/event.h"
 #include "ebslam/exponential_decay.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/particle_set2d.h"
 
 namespace ebslam {
 
@@ -59,7 +59,8 @@ struct EventFilterConfig {
   void validate() const;
 };
 
-/// Checks a span of events against the sensor and the previous timestamp (last_t_us, updated).
+/// Checks a span of events against the sensor and the previous timestamp (last_t_us, updated
+/// only when every event passes).
 /// Throws std::invalid_argument naming the index of the first event outside the sensor or
 /// earlier than its predecessor.
 void validateEvents(const Event* events, std::size_t count, int width, int height,
@@ -106,6 +107,14 @@ class G0Tracker {
   std::uint64_t window_events_ = 0;
   double smoothed_ = 0.0;
 };
+
+/// A filter's switch to a new EventFilterConfig at run time (EB-PF and EB-SLAM-2D alike): returns
+/// the G0 to continue with (the adapted G0 of `schedule` while G0 adaptation stays on, otherwise
+/// the new config's), and re-draws the particles around `current` with the new spreads and seed
+/// when the particle count changed (otherwise they are kept). The caller validates `next`.
+double switchFilterConfig(const EventFilterConfig& previous, const EventFilterConfig& next,
+                          const G0Schedule& schedule, const Pose2& current,
+                          ParticleSet2D& particles);
 
 /// The localisation pass of alg. 7 (alg. 8's "update particles"): scores the particles against
 /// `map` for `events` in batches of at most config.batch_size, each batch diffused with b times

@@ -17,7 +17,7 @@
 #include <Eigen/Core>
 
 #include "ebslam/floor_robot.h"
-#include "ebslam/particles2d.h"
+#include "ebslam/particle_set2d.h"
 
 namespace ebslam {
 

@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include "ebslam/pose.h"
+
 namespace ebslam {
 
 /// A closed polygon; vertices in order, the closing vertex not repeated [m].
@@ -19,9 +21,9 @@ using Polygon2 = std::vector<Eigen::Vector2d>;
 
 struct FloorPlan {
   std::string name;
-  Polygon2 walls;                        ///< room boundary; the floor is its inside
-  std::vector<Polygon2> obstacles;       ///< solid obstacles inside the room
-  Eigen::Vector3d start{0.0, 0.0, 0.0};  ///< robot start pose (x [m], y [m], theta [rad])
+  Polygon2 walls;                   ///< room boundary; the floor is its inside
+  std::vector<Polygon2> obstacles;  ///< solid obstacles inside the room
+  Pose2 start;                      ///< robot start pose
 
   /// Throws std::invalid_argument with the reason if the plan is unusable: fewer than three
   /// vertices or zero area in a polygon, non-finite coordinates, a self-intersecting wall

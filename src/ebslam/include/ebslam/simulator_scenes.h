@@ -46,7 +46,7 @@ Trajectory makeFloorRobotTrajectory(const Trajectory& mocap_trajectory,
                                     const FloorRobotTrajectoryConfig& config = {});
 
 /// SE(2) pose (x, y, theta) of a floor-robot camera pose (camera -> world with camera z up).
-Eigen::Vector3d floorPoseToSe2(const StampedPose& pose);
+Pose2 floorPoseToSe2(const StampedPose& pose);
 /// Camera pose (camera -> world, z up) of an SE(2) robot pose at time t_s.
 StampedPose se2ToFloorPose(double t_s, double x, double y, double theta);
 

@@ -14,13 +14,14 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "ebslam/pose.h"
+
 namespace ebslam {
 
-/// One pose of a body in the world frame at a time.
-struct StampedPose {
-  double t_s = 0.0;                                                 ///< timestamp [s]
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();               ///< body origin in world [m]
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< body -> world, unit
+/// One pose of a body in the world frame (position: body origin in world [m], orientation: body ->
+/// world) at a time.
+struct StampedPose : Pose3 {
+  double t_s = 0.0;  ///< timestamp [s]
 };
 
 /// Poses with strictly increasing timestamps.
