@@ -5,8 +5,8 @@
 //   - a quiet device (no events at all for longer than a wrap period): the periods the gap hid
 //     come from host time;
 //   - a reader that stops reading for 200 ms (descheduled) right after it found the line idle.
-// Bar (E2 and E3, stalls of 0.1, 0.2, 1 and 3 s): 0 events lost or invented, final time error
-// under 1 ms, time never backwards. Every result is printed.
+// Required (E2 and E3, stalls of 0.1, 0.2, 1 and 3 s): 0 events lost or invented, final time
+// error under 1 ms, time never backwards. Every result is printed.
 #include <gtest/gtest.h>
 
 #include <algorithm>
