@@ -26,6 +26,7 @@
 
 #include "edvs/protocol.h"
 #include "edvs/stream_check.h"
+#include "host_reads.h"
 
 using ebslam::Event;
 using ebslam::EventVector;
@@ -133,20 +134,7 @@ Outcome runNoisyLine(const EventVector& events, const ParserConfig& config, doub
   // returning the bytes that arrived by then; a read that finds nothing notes the idle line.
   EventParser parser(config);
   EventVector got;
-  std::size_t pos = 0;
-  std::int64_t host = arrival.front();
-  while (pos < bytes.size()) {
-    host += 100 + static_cast<std::int64_t>(rng() % 3900);
-    std::size_t end = pos;
-    while (end < bytes.size() && end - pos < 4096 && arrival[end] <= host) ++end;
-    if (end == pos) {
-      parser.noteIdle();
-      parser.flush(got);
-      continue;
-    }
-    parser.feed(bytes.data() + pos, end - pos, host, got);
-    pos = end;
-  }
+  edvs_test::readAsHost(parser, bytes, arrival, rng, 3900, got);
   parser.flush(got);
   const bool times = config.format != EventFormat::kNone && config.format != EventFormat::kDelta;
   Outcome outcome;

@@ -93,8 +93,7 @@ int main(int argc, char** argv) {
           static_cast<unsigned long>(p.bytes_dropped), static_cast<unsigned long>(p.clock_jumps));
       const double lost_limit = garbage > 0.02 ? 0.05 : 0.01;
       const bool ok = (!times || std::abs(c.final_error_us) <= 1000) && c.backwards == 0 &&
-                      c.lostShare() < lost_limit &&
-                      (!times || c.inventedShare() <= invented_limit);
+                      c.lostShare() < lost_limit && (!times || c.inventedShare() <= invented_limit);
       // The limits, printed as what they are; formats without device time are held to the
       // step-back and loss limits only.
       std::printf("%sno step back, lost < %.0f %%%s: %s\n",
