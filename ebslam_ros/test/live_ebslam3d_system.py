@@ -8,6 +8,7 @@ every node of the launch is up and answers, the 3D pipeline's topics carry messa
 frames, fused depth events, EB-SLAM-3D poses and map, the rig's tf), and that no node logged an
 ERROR or FATAL (/rosout_agg and the launch's own output)."""
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -58,6 +59,7 @@ class LiveEbslam3dSystemTest(unittest.TestCase):
     def tearDown(self):
         for process in (self.launch, self.emulator):
             launch_output.stop(process, grace_s=30)
+        shutil.rmtree(self.tmp, ignore_errors=True)
 
     def on_log(self, msg):
         if msg.level >= Log.ERROR:
