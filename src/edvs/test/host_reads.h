@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "edvs/protocol.h"
+#include "edvs/event_parser.h"
 
 namespace edvs_test {
 
