@@ -21,6 +21,7 @@ of all nodelets start at once on a pool of ~jobs threads (each case is a subproc
 waits for a node to start), and each test method waits for its own case's outcome.
 """
 import concurrent.futures
+import os
 import sys
 import tempfile
 import time
@@ -31,7 +32,9 @@ import rospkg
 import rospy
 import rostest
 
-from launch_output import problem_lines, run_until_exit, run_until_output
+# launch_output.py lies beside this file (also where catkin's relay script runs it from elsewhere).
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from launch_output import problem_lines, run_until_exit, run_until_output  # noqa: E402
 
 EXIT_TIMEOUT_S = 40.0
 CASE_FIELDS = ("node_pkg", "node_type", "nodelet", "bad_param", "bad_value", "wrong_type_param",
