@@ -55,7 +55,7 @@ class DaspNodelet : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "Dasp " + getName(),
-                             [&] { config_ = loadDaspNodeConfig(pnh); });
+                                   [&] { config_ = loadDaspNodeConfig(pnh); });
     segmenter_ = std::make_unique<dasp::DaspSegmenter>(config_.dasp);
 
     image_transport::ImageTransport transport(nh);

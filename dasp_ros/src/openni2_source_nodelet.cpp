@@ -68,7 +68,7 @@ class OpenNi2SourceNodelet : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "OpenNi2Source " + getName(),
-                             [&] { config_ = loadOpenNi2SourceConfig(pnh); });
+                                   [&] { config_ = loadOpenNi2SourceConfig(pnh); });
     image_transport::ImageTransport transport(nh);
     color_pub_ = transport.advertise("rgb/image_rect_color", 2);
     depth_pub_ = transport.advertise("depth_registered/image_raw", 2);

@@ -55,7 +55,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "Sdasp " + getName(),
-                             [&] { config_ = loadSdaspNodeConfig(pnh); });
+                                   [&] { config_ = loadSdaspNodeConfig(pnh); });
     array_topic_ = nh.resolveName("superpixels");
     labels_topic_ = nh.resolveName("superpixels/labels");
     image_transport::ImageTransport transport(nh);

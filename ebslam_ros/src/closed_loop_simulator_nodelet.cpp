@@ -52,9 +52,9 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <thread>
 
+#include "closed_loop_simulator_params.h"
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ground_truth_publisher.h"
-#include "closed_loop_simulator_params.h"
 
 namespace ebslam_ros {
 
@@ -74,11 +74,12 @@ class ClosedLoopSimulatorNodelet : public nodelet::Nodelet {
     const std::string default_plan =
         package.empty() ? "" : package + "/data/floor_plans/office.txt";
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "closed-loop simulator " + getName(), [&] {
-      config_ = loadClosedLoopSimulatorNodeConfig(getPrivateNodeHandle(), default_plan);
-      plan_ = ebslam::readFloorPlan(config_.floor_plan, config_.simulator.robot.radius_m);
-      simulator_ = std::make_unique<ebslam::ClosedLoopSimulator>(plan_, config_.simulator);
-    });
+    ebslam_ros_common::startOrFail(
+        getPrivateNodeHandle(), "closed-loop simulator " + getName(), [&] {
+          config_ = loadClosedLoopSimulatorNodeConfig(getPrivateNodeHandle(), default_plan);
+          plan_ = ebslam::readFloorPlan(config_.floor_plan, config_.simulator.robot.radius_m);
+          simulator_ = std::make_unique<ebslam::ClosedLoopSimulator>(plan_, config_.simulator);
+        });
     ros::NodeHandle& nh = getNodeHandle();
     events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events", 1000);
     bump_pub_ = nh.advertise<ebslam_msgs::Bump>("bump", 100);

@@ -2,8 +2,8 @@
 
 #include <cstdint>
 
-#include "ceiling_sensor_params.h"
 #include <ebslam_ros_common/ros_param_helpers.h>
+#include "ceiling_sensor_params.h"
 
 #include "param_utils.h"
 

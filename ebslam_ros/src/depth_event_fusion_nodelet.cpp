@@ -57,8 +57,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "ebslam_msgs/event_conversions.h"
 #include "depth_event_fusion_params.h"
+#include "ebslam_msgs/event_conversions.h"
 
 namespace ebslam_ros {
 

@@ -30,8 +30,9 @@ class EventRendererNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(),
-                             [&] { config_ = loadEventRendererConfig(getPrivateNodeHandle()); });
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(), [&] {
+      config_ = loadEventRendererConfig(getPrivateNodeHandle());
+    });
     ros::NodeHandle& nh = getNodeHandle();
     image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);
     events_sub_ = nh.subscribe("events", 100, &EventRendererNodelet::onEvents, this);

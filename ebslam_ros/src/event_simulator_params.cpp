@@ -9,9 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <ebslam_ros_common/ros_param_helpers.h>
 #include "ceiling_sensor_params.h"
 #include "ebslam_ros/flat_yaml.h"
-#include <ebslam_ros_common/ros_param_helpers.h>
 
 #include "param_utils.h"
 

@@ -75,12 +75,13 @@ class EventSlam2dNodelet : public PlanarPoseFilterNodelet {
       image_pub_ = getNodeHandle().advertise<sensor_msgs::Image>("map/image", 1);
       normalisation_pub_ =
           getNodeHandle().advertise<nav_msgs::OccupancyGrid>("map/normalisation", 1, true);
-      startFilter(config.node, slam.filter,
-                  [slam, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
-                    ebslam::Ebslam2dConfig c = slam;
-                    c.filter = knobs;
-                    return std::make_unique<Backend>(c, camera, start);
-                  });
+      startFilter(
+          config.node, slam.filter,
+          [slam, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {
+            ebslam::Ebslam2dConfig c = slam;
+            c.filter = knobs;
+            return std::make_unique<Backend>(c, camera, start);
+          });
       save_srv_ = getNodeHandle().advertiseService("save_map", &EventSlam2dNodelet::onSave, this);
       NODELET_INFO("EB-SLAM-2D: map %.1f m with %.3f m cells, N=%d B=%d K=%d", slam.map_size_m,
                    slam.cell_size_wtrig * camera.wTrig(), slam.filter.num_particles,

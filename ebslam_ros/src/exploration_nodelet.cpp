@@ -55,8 +55,9 @@ class ExplorationNodelet : public nodelet::Nodelet {
 
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "exploration " + getName(),
-                             [&] { config_ = loadExplorationNodeConfig(getPrivateNodeHandle()); });
+    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "exploration " + getName(), [&] {
+      config_ = loadExplorationNodeConfig(getPrivateNodeHandle());
+    });
     ros::NodeHandle& nh = getNodeHandle();
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 10);
     plan_pub_ = nh.advertise<nav_msgs::Path>("plan", 1, true);

@@ -14,7 +14,6 @@ using ebslam_ros_common::param;
   ebslam_ros_common::failParam(nh, name, why);
 }
 
-
 std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
                              const std::array<double, 3>& default_value) {
   std::vector<double> values;
@@ -30,12 +29,10 @@ std::array<double, 3> triple(const ros::NodeHandle& nh, const std::string& name,
   return {values[0], values[1], values[2]};
 }
 
-
 void requireFrame(const ros::NodeHandle& nh, const std::string& name, const std::string& frame) {
   if (frame.empty()) fail(nh, name, "is empty");
   if (frame.front() == '/') fail(nh, name, "= '" + frame + "' must not start with '/' (tf2)");
 }
-
 
 std::vector<std::string> topicList(const ros::NodeHandle& nh, const std::string& name) {
   std::istringstream words(param<std::string>(nh, name, ""));
@@ -50,6 +47,5 @@ std::vector<std::string> topicList(const ros::NodeHandle& nh, const std::string&
   }
   return topics;
 }
-
 
 }  // namespace ebslam_ros

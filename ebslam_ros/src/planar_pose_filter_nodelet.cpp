@@ -74,9 +74,9 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
       [this](EventFilterKnobsConfig& k, std::uint32_t level) { onReconfigure(k, level); });
 
   startDiagnostics();
-  events_sub_ = nh.subscribe("events", static_cast<std::uint32_t>(config_.queue_size),
-                             &PlanarPoseFilterNodelet::onEvents, this,
-                             ros::TransportHints().tcpNoDelay());
+  events_sub_ =
+      nh.subscribe("events", static_cast<std::uint32_t>(config_.queue_size),
+                   &PlanarPoseFilterNodelet::onEvents, this, ros::TransportHints().tcpNoDelay());
 }
 
 bool PlanarPoseFilterNodelet::resolveMount() {

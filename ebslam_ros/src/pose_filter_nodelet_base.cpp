@@ -40,8 +40,8 @@ void PoseFilterNodeletBase::startOutputs(const PoseNodeConfig& config, std::uint
 }
 
 void PoseFilterNodeletBase::startDiagnostics() {
-  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(getNodeHandle(),
-                                                               getPrivateNodeHandle());
+  diagnostics_ =
+      std::make_unique<diagnostic_updater::Updater>(getNodeHandle(), getPrivateNodeHandle());
   diagnostics_->setHardwareID("none");
   diagnostics_->add(getName(), this, &PoseFilterNodeletBase::diagnose);
   diagnostics_timer_ =
@@ -69,8 +69,8 @@ std::optional<geometry_msgs::Transform> PoseFilterNodeletBase::lookupMount() {
         .transform;
   } catch (const tf2::TransformException& error) {
     ROS_WARN_THROTTLE(kWarnPeriodS, "%s: events dropped until tf has %s -> %s: %s",
-                      getName().c_str(), config_->base_frame.c_str(),
-                      config_->sensor_frame.c_str(), error.what());
+                      getName().c_str(), config_->base_frame.c_str(), config_->sensor_frame.c_str(),
+                      error.what());
   }
   return std::nullopt;
 }
@@ -187,8 +187,8 @@ void PoseFilterNodeletBase::publishTfOf(const Transform& map_to_base, const ros:
           odom_to_base);
     } catch (const tf2::TransformException& error) {
       ROS_WARN_THROTTLE(kWarnPeriodS, "%s: no %s -> %s at the events' time, map -> %s not sent: %s",
-                        getName().c_str(), config_->odom_frame.c_str(),
-                        config_->base_frame.c_str(), config_->odom_frame.c_str(), error.what());
+                        getName().c_str(), config_->odom_frame.c_str(), config_->base_frame.c_str(),
+                        config_->odom_frame.c_str(), error.what());
       return;
     }
   }
@@ -213,8 +213,8 @@ void PoseFilterNodeletBase::publishTf(const Eigen::Isometry3d& map_to_base,
 void PoseFilterNodeletBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
   if (!mountKnown()) {
-    status.summaryf(DiagnosticStatus::WARN, "waiting for tf %s -> %s",
-                    config_->base_frame.c_str(), config_->sensor_frame.c_str());
+    status.summaryf(DiagnosticStatus::WARN, "waiting for tf %s -> %s", config_->base_frame.c_str(),
+                    config_->sensor_frame.c_str());
   } else if (counters_.filter_errors > 0) {
     status.summary(DiagnosticStatus::ERROR, "the filter rejected events (see the log)");
   } else if (counters_.bad_input > bad_input_reported_) {

@@ -44,9 +44,9 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
 
   /// What the input brought since the start (diagnostics); bad_input counts every problem.
   struct InputCounters {
-    std::uint64_t messages = 0, events_in = 0, empty_messages = 0, rejected_frame = 0,
-                  clamped = 0, zero_time = 0, restarts = 0, gaps = 0, waiting_for_mount = 0,
-                  filter_errors = 0, bad_input = 0;
+    std::uint64_t messages = 0, events_in = 0, empty_messages = 0, rejected_frame = 0, clamped = 0,
+                  zero_time = 0, restarts = 0, gaps = 0, waiting_for_mount = 0, filter_errors = 0,
+                  bad_input = 0;
   };
 
   /// Starts tf and the publishers pose (queue `pose_queue`), path and particles in the node's

@@ -61,10 +61,11 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     const std::string default_trajectory =
         package.empty() ? "" : package + "/data/sample_session/pioneer_360_excerpt.txt";
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
-    ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "RGB-D event simulator " + getName(), [&] {
-      config_ = loadRgbdEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
-      prepare();
-    });
+    ebslam_ros_common::startOrFail(
+        getPrivateNodeHandle(), "RGB-D event simulator " + getName(), [&] {
+          config_ = loadRgbdEventSimulatorNodeConfig(getPrivateNodeHandle(), default_trajectory);
+          prepare();
+        });
     ros::NodeHandle& nh = getNodeHandle();
     depth_pub_ = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 10);
     depth_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("depth_registered/camera_info", 10);

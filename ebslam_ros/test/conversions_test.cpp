@@ -129,8 +129,8 @@ TEST(Conversions, XyzRpyIsTf2sFixedAxisConvention) {
 }
 
 TEST(Conversions, PlanarPoseMatchesItsTransformAndPoseMessage) {
-  for (const ebslam::Pose2& p : std::vector<ebslam::Pose2>{
-           {0.0, 0.0, 0.0}, {1.5, -2.25, 3.0}, {-0.1, 4.0, -M_PI / 2}}) {
+  for (const ebslam::Pose2& p :
+       std::vector<ebslam::Pose2>{{0.0, 0.0, 0.0}, {1.5, -2.25, 3.0}, {-0.1, 4.0, -M_PI / 2}}) {
     const geometry_msgs::Pose msg = toPoseMsg(p);
     EXPECT_EQ(msg.position.x, p.x);
     EXPECT_EQ(msg.position.y, p.y);

@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "ebslam_msgs/event_conversions.h"
-#include "ebslam_ros/dedvs_session.h"
 #include "ebslam_ros/conversions.h"
+#include "ebslam_ros/dedvs_session.h"
 #include "rostest_util.h"
 
 namespace {

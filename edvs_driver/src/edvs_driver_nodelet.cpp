@@ -74,7 +74,7 @@ void EdvsDriverNodelet::onInit() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
   ebslam_ros_common::startOrFail(pnh, "edvs_driver " + getName(),
-                           [&] { params_ = loadDriverParams(pnh); });
+                                 [&] { params_ = loadDriverParams(pnh); });
   batch_size_ = params_.batch_size;
   publish_rate_hz_ = params_.publish_rate_hz;
 

@@ -52,32 +52,38 @@ DriverParams loadDriverParams(const ros::NodeHandle& pnh) {
   p.device.uri = ebslam_ros_common::param<std::string>(pnh, "uri", p.device.uri);
   const std::string firmware = ebslam_ros_common::param<std::string>(pnh, "firmware", "current");
   const auto fw = parseFirmware(firmware);
-  if (!fw) ebslam_ros_common::failParam(pnh, "firmware", "'" + firmware + "' is not current or legacy");
+  if (!fw)
+    ebslam_ros_common::failParam(pnh, "firmware", "'" + firmware + "' is not current or legacy");
   p.device.firmware = *fw;
   const std::string format = ebslam_ros_common::param<std::string>(pnh, "format", "E2");
   const auto f = parseEventFormat(format, p.device.firmware);
   if (!f)
     ebslam_ros_common::failParam(pnh, "format",
-                           "'" + format + "' is not E0..E4 or none/delta/ts16/ts24/ts32");
+                                 "'" + format + "' is not E0..E4 or none/delta/ts16/ts24/ts32");
   p.device.format = *f;
   const std::string sync = ebslam_ros_common::param<std::string>(pnh, "sync_mode", "none");
   const auto s = parseSyncMode(sync);
-  if (!s) ebslam_ros_common::failParam(pnh, "sync_mode", "'" + sync + "' is not none, master or slave");
+  if (!s)
+    ebslam_ros_common::failParam(pnh, "sync_mode", "'" + sync + "' is not none, master or slave");
   p.device.sync = *s;
   p.device.on_bit = ebslam_ros_common::param(pnh, "on_bit", p.device.on_bit);
   p.device.banner_timeout_ms =
       ebslam_ros_common::param(pnh, "banner_timeout", p.device.banner_timeout_ms);
   p.device.command_gap_ms = ebslam_ros_common::param(pnh, "command_gap", p.device.command_gap_ms);
-  p.device.infer_wraps_from_host_time =
-      ebslam_ros_common::param(pnh, "infer_wraps_from_host_time", p.device.infer_wraps_from_host_time);
-  if (p.device.command_gap_ms < 0) ebslam_ros_common::failParam(pnh, "command_gap", "must be >= 0 ms");
+  p.device.infer_wraps_from_host_time = ebslam_ros_common::param(
+      pnh, "infer_wraps_from_host_time", p.device.infer_wraps_from_host_time);
+  if (p.device.command_gap_ms < 0)
+    ebslam_ros_common::failParam(pnh, "command_gap", "must be >= 0 ms");
   p.frame_id = ebslam_ros_common::param<std::string>(pnh, "frame_id", p.frame_id);
   p.camera_name = ebslam_ros_common::param<std::string>(pnh, "camera_name", p.camera_name);
-  p.camera_info_url = ebslam_ros_common::param<std::string>(pnh, "camera_info_url", p.camera_info_url);
+  p.camera_info_url =
+      ebslam_ros_common::param<std::string>(pnh, "camera_info_url", p.camera_info_url);
   p.publish_rate_hz = ebslam_ros_common::param(pnh, "publish_rate", p.publish_rate_hz);
   p.batch_size = ebslam_ros_common::param(pnh, "batch_size", p.batch_size);
-  p.link.reconnect_min_s = ebslam_ros_common::param(pnh, "reconnect_min_delay", p.link.reconnect_min_s);
-  p.link.reconnect_max_s = ebslam_ros_common::param(pnh, "reconnect_max_delay", p.link.reconnect_max_s);
+  p.link.reconnect_min_s =
+      ebslam_ros_common::param(pnh, "reconnect_min_delay", p.link.reconnect_min_s);
+  p.link.reconnect_max_s =
+      ebslam_ros_common::param(pnh, "reconnect_max_delay", p.link.reconnect_max_s);
   p.stall_warn_s = ebslam_ros_common::param(pnh, "stall_timeout", p.stall_warn_s);
   p.link.stall_reconnect_s =
       ebslam_ros_common::param(pnh, "stall_reconnect_timeout", p.link.stall_reconnect_s);
