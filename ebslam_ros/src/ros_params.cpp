@@ -5,7 +5,7 @@
 #include <ebslam_msgs/ros_param_helpers.h>
 #include <ros/names.h>
 
-#include <ebslam/dedvs_io.h>
+#include <ebslam/simulation/dedvs_io.h>
 
 #include <algorithm>
 #include <cmath>
@@ -561,7 +561,8 @@ DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle&
   DepthEventFusionNodeConfig c;
   c.calibration = param<std::string>(nh, "calibration", c.calibration);
   if (c.calibration.empty()) {
-    fail(nh, "calibration", "is not set (a D-eDVS sensors yaml, format in ebslam/dedvs_io.h)");
+    fail(nh, "calibration",
+         "is not set (a D-eDVS sensors yaml, format in ebslam/simulation/dedvs_io.h)");
   }
   try {
     c.sensors = ebslam::readDedvsSensors(c.calibration);

@@ -11,21 +11,21 @@
 #include <cmath>
 #include <vector>
 
-#include <ebslam/camera_model.h>
-#include <ebslam/closed_loop_simulator.h>
-#include <ebslam/dedvs_fusion.h>
-#include <ebslam/dedvs_scene.h>
-#include <ebslam/dedvs_simulator.h>
-#include <ebslam/ebpf.h>
-#include <ebslam/ebslam2d.h>
-#include <ebslam/ebslam3d.h>
-#include <ebslam/event.h>
-#include <ebslam/event_denoiser.h>
-#include <ebslam/event_io.h>
-#include <ebslam/exploration.h>
-#include <ebslam/particle_set2d.h>
-#include <ebslam/simulator.h>
-#include <ebslam/simulator_scenes.h>
+#include <ebslam/events/event.h>
+#include <ebslam/events/event_denoiser.h>
+#include <ebslam/events/event_io.h>
+#include <ebslam/simulation/closed_loop_simulator.h>
+#include <ebslam/simulation/dedvs_scene.h>
+#include <ebslam/simulation/dedvs_simulator.h>
+#include <ebslam/simulation/simulator.h>
+#include <ebslam/simulation/simulator_scenes.h>
+#include <ebslam/slam/camera_model.h>
+#include <ebslam/slam/dedvs_fusion.h>
+#include <ebslam/slam/ebpf.h>
+#include <ebslam/slam/ebslam2d.h>
+#include <ebslam/slam/ebslam3d.h>
+#include <ebslam/slam/exploration.h>
+#include <ebslam/slam/particle_set2d.h>
 
 namespace ebslam_ros {
 
@@ -109,7 +109,7 @@ struct EventSlam2dNodeConfig {
 };
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& private_nh);
 
-/// EB-SLAM-3D core (ebslam/ebslam3d.h) over `defaults`: ~num_particles, ~batch_size,
+/// EB-SLAM-3D core (ebslam/slam/ebslam3d.h) over `defaults`: ~num_particles, ~batch_size,
 /// ~resample_every, ~event_share, ~sigma_position [m], ~sigma_rotation [rad], ~score_alpha,
 /// ~voxel_size [m], ~splat_lambda, ~focal_px [px], ~min_range [m], ~max_range [m],
 /// ~max_map_mb [MiB, 0 = unbounded], ~splat (expected_pose|all_particles), ~seed.
@@ -144,7 +144,7 @@ struct EventSlam3dNodeConfig {
 };
 EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& private_nh);
 
-/// Background-activity filter (ebslam/event_denoiser.h) from `nh`: ~window [s] 0.1,
+/// Background-activity filter (ebslam/events/event_denoiser.h) from `nh`: ~window [s] 0.1,
 /// ~min_support 3, ~polarity_match true, ~refractory_filter false, ~refractory_period [s] 0.001
 /// (the core defaults). Times are rounded to microseconds.
 ebslam::BackgroundActivityFilterConfig loadBackgroundActivityFilterConfig(
@@ -219,8 +219,9 @@ EventSimulatorNodeConfig loadEventSimulatorNodeConfig(const ros::NodeHandle& pri
 
 /// Configuration of the DepthEventFusion nodelet (D-eDVS depth for every event, thesis 8.2).
 struct DepthEventFusionNodeConfig {
-  /// ~calibration (required): sensors yaml (ebslam/dedvs_io.h readDedvsSensors format: eDVS
-  /// intrinsics and distortion, depth intrinsics, depth_from_edvs, depth clock offset, frame rate)
+  /// ~calibration (required): sensors yaml (ebslam/simulation/dedvs_io.h readDedvsSensors format:
+  /// eDVS intrinsics and distortion, depth intrinsics, depth_from_edvs, depth clock offset, frame
+  /// rate)
   std::string calibration;
   ebslam::DedvsSensors sensors;      ///< read from ~calibration
   ebslam::DepthFusionConfig fusion;  ///< ~min_depth, ~max_depth [m], ~max_frame_age [s],
@@ -300,7 +301,7 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& private_n
 
 /// The closed-loop floor-robot simulator (ClosedLoopSimulator nodelet, thesis 7.4).
 struct ClosedLoopSimulatorNodeConfig {
-  std::string floor_plan;  ///< ~floor_plan: floor-plan file (ebslam/floor_plan.h)
+  std::string floor_plan;  ///< ~floor_plan: floor-plan file (ebslam/simulation/floor_plan.h)
   /// The eDVS (~camera/*, ~ceiling_distance as the filters'), ~seed (event model and ceiling),
   /// ~noise_rate [Hz per pixel], robot limits ~robot_radius [m], ~max_speed [m/s],
   /// ~max_turn_rate [rad/s], ~bump_segments.

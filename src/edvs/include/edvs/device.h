@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/protocol.h"
 #include "edvs/transport.h"
 

@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/protocol.h"
 
 namespace edvs {

@@ -1,7 +1,7 @@
 #pragma once
 
 // eDVS4337 serial protocol: command builder, event formats, incremental parser with resync and
-// 64-bit timestamp unwrapping. ROS-free; depends only on ebslam/event.h.
+// 64-bit timestamp unwrapping. ROS-free; depends only on ebslam/events/event.h.
 // One event on the wire: 1yyyyyyy pxxxxxxx, then the format's time field (none, 1-4 delta bytes,
 // or a big-endian 16/24/32-bit device time in us). p = 1 is ON (ParserConfig::on_bit swaps it).
 // Byte layouts, wrap periods and the polarity convention: edvs_driver/README.md, "Event formats
@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 
 namespace edvs {
 
