@@ -1,6 +1,7 @@
 # Extra dependencies of the dasp tools: OpenCV ximgproc and PCL supervoxels for the peer methods
-# (library dasp_peers, tools/peers/), CLI11 and nlohmann-json for the command lines. They are
-# linked into the tools only, never into the dasp library itself.
+# (library dasp_peers, tools/peers/), the parts of dasp_sdasp (tools/sdasp/), CLI11 and
+# nlohmann-json for the command lines. They are linked into the tools only, never into the dasp
+# library itself.
 if(DASP_BUILD_TOOLS)
   find_package(CLI11 REQUIRED)
   find_package(nlohmann_json 3 REQUIRED)
@@ -17,7 +18,14 @@ if(DASP_BUILD_TOOLS)
   target_link_libraries(dasp_peers PUBLIC dasp::dasp opencv_ximgproc
     PRIVATE pcl_common pcl_octree pcl_kdtree pcl_search pcl_segmentation)
   target_compile_options(dasp_peers PRIVATE ${DASP_WARNINGS})
-  list(APPEND DASP_TOOL_LIBS dasp_peers CLI11::CLI11 nlohmann_json::nlohmann_json)
+  # The parts of dasp_sdasp beside its command line (tools/sdasp/); linked like the other tool
+  # libraries, only dasp_sdasp uses them.
+  add_library(dasp_sdasp_parts STATIC ${CMAKE_CURRENT_SOURCE_DIR}/tools/sdasp/common.cpp
+    ${CMAKE_CURRENT_SOURCE_DIR}/tools/sdasp/evaluate.cpp)
+  target_include_directories(dasp_sdasp_parts PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/tools)
+  target_link_libraries(dasp_sdasp_parts PUBLIC dasp::dasp dasp_peers nlohmann_json::nlohmann_json)
+  target_compile_options(dasp_sdasp_parts PRIVATE ${DASP_WARNINGS})
+  list(APPEND DASP_TOOL_LIBS dasp_peers dasp_sdasp_parts CLI11::CLI11 nlohmann_json::nlohmann_json)
   list(APPEND DASP_TEST_LIBS dasp_peers)  # test/peers_test.cpp
 endif()
 

@@ -3,7 +3,8 @@
 #include <benchmark/benchmark.h>
 
 #include "edvs/emulator.h"
-#include "edvs/protocol.h"
+#include "edvs/event_encoder.h"
+#include "edvs/event_parser.h"
 
 namespace {
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "edvs/protocol.h"
+#include "edvs/event_parser.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return 0;

@@ -11,8 +11,11 @@ build="${2:-/tmp/edvs_fuzz}"
 mkdir -p "${build}"
 flags=(-std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
   -I"${lib}/include" -I"${src}/ebslam/include")
-sources=("${lib}/src/protocol.cpp" "${lib}/src/device.cpp" "${lib}/src/transport.cpp"
-  "${lib}/src/serial_baud.cpp" "${lib}/src/usb_discovery.cpp")
+sources=()
+for name in biases commands event_encoder event_format event_framing event_parser format_detection \
+  timestamp_unwrapper device transport serial_baud usb_discovery; do
+  sources+=("${lib}/src/${name}.cpp")
+done
 for target in parser_fuzzer uri_fuzzer; do
   clang++ "${flags[@]}" "${here}/${target}.cpp" "${sources[@]}" -lusb-1.0 -lpthread \
     -o "${build}/${target}"

@@ -18,6 +18,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "edvs/biases.h"
+
 namespace edvs {
 
 namespace {

@@ -4,7 +4,12 @@
 #include <random>
 #include <vector>
 
-#include "edvs/protocol.h"
+#include "edvs/biases.h"
+#include "edvs/commands.h"
+#include "edvs/event_encoder.h"
+#include "edvs/event_format.h"
+#include "edvs/event_parser.h"
+#include "edvs/format_detection.h"
 
 using ebslam::Event;
 using ebslam::EventVector;

@@ -15,7 +15,10 @@
 #include <vector>
 
 #include "ebslam/events/event.h"
-#include "edvs/protocol.h"
+#include "edvs/biases.h"
+#include "edvs/commands.h"
+#include "edvs/event_format.h"
+#include "edvs/event_parser.h"
 #include "edvs/transport.h"
 
 namespace edvs {
@@ -47,7 +50,7 @@ struct DeviceConfig {
   EventFormat format = EventFormat::kAbs16;
   Firmware firmware = Firmware::kCurrent;  ///< overridden by the URI's firmware= if given
   SyncMode sync = SyncMode::kNone;
-  int on_bit = 1;                          ///< polarity bit meaning ON (see protocol.h)
+  int on_bit = 1;                          ///< polarity bit meaning ON (see event_format.h)
   int banner_timeout_ms = 1500;            ///< wait for the reset banner [ms]
   int command_gap_ms = 10;                 ///< pause after each command [ms]
   bool require_banner = true;              ///< fail the open if no banner arrives (no device there)

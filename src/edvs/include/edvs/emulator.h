@@ -14,7 +14,8 @@
 #include <vector>
 
 #include "ebslam/events/event.h"
-#include "edvs/protocol.h"
+#include "edvs/event_encoder.h"  // the device side: what it sends, tests encode alike
+#include "edvs/event_format.h"
 
 namespace edvs {
 
