@@ -41,6 +41,50 @@ step() {  # step NAME LOG COMMAND...: runs a step, keeps its log, says how it we
   fi
 }
 
+# rviz under a virtual display (Mesa llvmpipe) for the launch that follows, and a capture of the
+# screen every second while it runs; the last capture that shows rviz (not one flat colour: rviz not
+# up yet, or closed) is kept as KEPT, so the picture is from near the end of the bag whatever the
+# machine's speed. Sets rviz_arg (true when rviz can run), display, xvfb_pid and capture_pid.
+#   start_rviz_capture DISPLAY_OFFSET XVFB_LOG KEPT SECONDS
+start_rviz_capture() {
+  rviz_arg=false
+  xvfb_pid=""
+  capture_pid=""
+  capture_tmp=""
+  display=""
+  if ! { command -v Xvfb >/dev/null && command -v rviz >/dev/null && [ -x /usr/bin/import ]; }; then
+    return 0
+  fi
+  display=":$((90 + (port + $1) % 9))"
+  Xvfb "${display}" -screen 0 1280x800x24 +extension GLX >"${out}/logs/$2" 2>&1 &
+  xvfb_pid=$!
+  rviz_arg=true
+  local kept="$3" seconds="$4"
+  capture_tmp="${kept%.png}_capture.png"
+  (for _ in $(seq 1 "${seconds}"); do
+     sleep 1
+     DISPLAY="${display}" /usr/bin/import -window root "${capture_tmp}" >/dev/null 2>&1 || continue
+     if [ "$(/usr/bin/convert "${capture_tmp}" -format '%[fx:standard_deviation>0.02]' info: 2>/dev/null)" = 1 ]; then
+       mv -f "${capture_tmp}" "${kept}"
+     fi
+   done) &
+  capture_pid=$!
+}
+
+# Ends the capture loop of start_rviz_capture (the kept picture stays).
+end_capture_loop() {
+  [ -n "${capture_pid}" ] && kill "${capture_pid}" 2>/dev/null || true
+  [ -n "${capture_tmp}" ] && rm -f "${capture_tmp}"
+  return 0
+}
+
+# Ends the capture loop and the virtual display of start_rviz_capture.
+stop_rviz_capture() {
+  end_capture_loop
+  [ -n "${xvfb_pid}" ] && kill "${xvfb_pid}" 2>/dev/null || true
+  wait 2>/dev/null || true
+}
+
 status=0
 echo "demo: 0. the recorded session through launch/playback.launch (DASP, s-DASP, EB-SLAM-2D, event image)"
 # A master of our own on a free port, so the demo never talks to another running ROS system.
@@ -49,29 +93,10 @@ export ROS_MASTER_URI="http://localhost:${port}"
 export ROS_LOG_DIR="${out}/logs"
 pb="${out}/playback"
 mkdir -p "${pb}"
-rviz_arg=false
-xvfb_pid=""
-if command -v Xvfb >/dev/null && command -v rviz >/dev/null && [ -x /usr/bin/import ]; then
-  # rviz renders under a virtual display (Mesa llvmpipe); the screenshot is taken near the end of the bag.
-  display=":$((90 + port % 9))"
-  Xvfb "${display}" -screen 0 1280x800x24 +extension GLX >"${out}/logs/xvfb.log" 2>&1 &
-  xvfb_pid=$!
-  rviz_arg=true
-  # A capture every second while the launch runs; the last one that shows rviz (not one flat colour:
-  # rviz not up yet, or closed) is kept, so the picture is from near the end of the bag whatever
-  # the machine's speed.
-  (for _ in $(seq 1 300); do
-     sleep 1
-     DISPLAY="${display}" /usr/bin/import -window root "${pb}/rviz_capture.png" >/dev/null 2>&1 || continue
-     if [ "$(/usr/bin/convert "${pb}/rviz_capture.png" -format '%[fx:standard_deviation>0.02]' info: 2>/dev/null)" = 1 ]; then
-       mv -f "${pb}/rviz_capture.png" "${pb}/rviz.png"
-     fi
-   done) &
-  capture_pid=$!
-fi
+start_rviz_capture 0 xvfb.log "${pb}/rviz.png" 300
 if DISPLAY="${display:-}" LIBGL_ALWAYS_SOFTWARE=1 roslaunch -p "${port}" "${repo}/launch/demo_playback.launch" \
   output_dir:="${pb}" rviz:="${rviz_arg}" </dev/null >"${out}/logs/playback_roslaunch.log" 2>&1 &&
-  { [ -z "${capture_pid:-}" ] || kill "${capture_pid}" 2>/dev/null || true; rm -f "${pb}/rviz_capture.png"; } &&
+  end_capture_loop &&
   /usr/bin/python3 "${repo}/scripts/demo_outputs.py" "${pb}/demo.bag" "${pb}" >"${pb}/topics_summary.txt"; then
   ebslam_evaluate_trajectory --no-time-offset "${pb}/trajectory.tum" "${pb}/ground_truth.tum" >"${pb}/trajectory_eval.txt" 2>&1 || status=1
   note "  playback of test/data/session/session.bag (outputs in demo_output/playback):"
@@ -82,38 +107,18 @@ else
   note "  playback: FAILED (see demo_output/logs/playback_roslaunch.log)"
   status=1
 fi
-[ -n "${capture_pid:-}" ] && kill "${capture_pid}" 2>/dev/null || true
-[ -n "${xvfb_pid}" ] && kill "${xvfb_pid}" 2>/dev/null || true
-wait 2>/dev/null || true
+stop_rviz_capture
 
 echo "demo: 0b. the D-eDVS session through playback.launch slam:=ebslam3d (depth fusion, EB-SLAM-3D)"
 d3="${out}/dedvs"
 mkdir -p "${d3}"
 session3d="${repo}/test/data/dedvs_session/dedvs_session.bag"
 calibration3d="${repo}/ebslam_ros/config/dedvs_sensors.yaml"
-rviz_arg=false
-xvfb_pid=""
-capture_pid=""
-if command -v Xvfb >/dev/null && command -v rviz >/dev/null && [ -x /usr/bin/import ]; then
-  display=":$((90 + (port + 1) % 9))"
-  Xvfb "${display}" -screen 0 1280x800x24 +extension GLX >"${out}/logs/xvfb3d.log" 2>&1 &
-  xvfb_pid=$!
-  rviz_arg=true
-  # As in part 0: the last capture that shows rviz is kept (the 3D view near the end of the bag).
-  (for _ in $(seq 1 120); do
-     sleep 1
-     DISPLAY="${display}" /usr/bin/import -window root "${d3}/rviz_capture.png" >/dev/null 2>&1 || continue
-     if [ "$(/usr/bin/convert "${d3}/rviz_capture.png" -format '%[fx:standard_deviation>0.02]' info: 2>/dev/null)" = 1 ]; then
-       mv -f "${d3}/rviz_capture.png" "${d3}/rviz_ebslam3d.png"
-     fi
-   done) &
-  capture_pid=$!
-fi
+start_rviz_capture 1 xvfb3d.log "${d3}/rviz_ebslam3d.png" 120
 start3d=${SECONDS}
 if DISPLAY="${display:-}" LIBGL_ALWAYS_SOFTWARE=1 roslaunch -p "${port}" "${repo}/launch/demo_playback3d.launch" \
   output_dir:="${d3}" rviz:="${rviz_arg}" </dev/null >"${out}/logs/playback3d_roslaunch.log" 2>&1; then
-  [ -z "${capture_pid}" ] || kill "${capture_pid}" 2>/dev/null || true
-  rm -f "${d3}/rviz_capture.png"
+  end_capture_loop
   if rosrun ebslam_ros dedvs_session_eval --session "${session3d}" --calibration "${calibration3d}" --poses "${d3}/demo3d.bag" \
     --estimate "${d3}/trajectory.tum" >"${d3}/rmse.txt" 2>&1; then
     note "  D-eDVS session test/data/dedvs_session/dedvs_session.bag through ROS in $((SECONDS - start3d)) s (outputs in demo_output/dedvs):"
@@ -128,9 +133,7 @@ else
   note "  D-eDVS playback: FAILED (see demo_output/logs/playback3d_roslaunch.log)"
   status=1
 fi
-[ -n "${capture_pid}" ] && kill "${capture_pid}" 2>/dev/null || true
-[ -n "${xvfb_pid}" ] && kill "${xvfb_pid}" 2>/dev/null || true
-wait 2>/dev/null || true
+stop_rviz_capture
 
 echo "demo: 1. event simulation, EB-PF and EB-SLAM-2D"
 e2d="${out}/events2d"

@@ -3,7 +3,8 @@
 # Debug with AddressSanitizer and UndefinedBehaviorSanitizer (test/sanitize/) and runs their
 # tests under them. Any sanitizer finding fails its test; known false alarms of uninstrumented
 # Debian libraries are suppressed in test/sanitize/*.supp (each one explained).
-# Then the message fuzz targets (test/fuzz/run_fuzz.sh), FUZZ_SECONDS each (default 30).
+# Then the message fuzz targets (test/fuzz/run_fuzz.sh), FUZZ_SECONDS each (default 15), JOBS at
+# a time; a longer search is `FUZZ_SECONDS=600 make test-sanitize` or `test/fuzz/run_fuzz.sh 600`.
 # Last line: "sanitize: N passed, N failed, N skipped".
 # Environment: SANITIZE_DIR (build folder, default <repo>/.ws/sanitize), JOBS (default: cores),
 # SANITIZE_RESULTS (JUnit folder, default <build folder>/test_results).
@@ -40,10 +41,10 @@ grep -E "tests passed|FAILED|Failed|ERROR: (Address|Leak)Sanitizer|runtime error
 tested=$(date +%s)
 echo "test-sanitize: build $((built - start)) s, tests $((tested - built)) s (log: ${build}/ctest.log)"
 # Every message a nodelet subscribes to, fuzzed through its conversion (test/fuzz, clang):
-# FUZZ_SECONDS per target (default 30; 0 skips them). One JUnit case per target.
-if [ "${FUZZ_SECONDS:-30}" != 0 ]; then
+# FUZZ_SECONDS per target (default 15; 0 skips them). One JUnit case per target.
+if [ "${FUZZ_SECONDS:-15}" != 0 ]; then
   FUZZ_BUILD="${build}/fuzz" FUZZ_RESULTS="${results}" JOBS="${jobs}" \
-    bash "${repo}/test/fuzz/run_fuzz.sh" "${FUZZ_SECONDS:-30}" || status=1
+    bash "${repo}/test/fuzz/run_fuzz.sh" "${FUZZ_SECONDS:-15}" || status=1
   echo "test-sanitize: fuzzing $(( $(date +%s) - tested )) s"
 fi
 counts=$(/usr/bin/python3 "${repo}/scripts/count_junit.py" \

@@ -17,7 +17,7 @@ ref="${REF:-HEAD}"  # the commit or tree copied into the workspace
 # shellcheck source=ros_env.sh
 source "${repo}/scripts/ros_env.sh"
 # Debian's pluginlib uses FindPython3: both variables point at Debian's interpreter (a pyenv one
-# would be found otherwise; see docs of the platform in the README).
+# would be found otherwise; see docs/building.md).
 python_args=(-DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3)
 
 # A user's workspace: their own package beside a clone of this repository.

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Bar "same results through ROS": compares the label images published by the running pipeline
+"""Same results through ROS: compares the label images published by the running pipeline
 (RgbdFolderSource -> Dasp -> Sdasp, launch/folder_segmentation.launch with loop:=true) with the
 PNGs that dasp_segment --labels and dasp_sdasp segment --labels wrote for the same frames.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bar "same results through ROS" over a whole folder (default: the 45 OSD learn frames):
+# Same results through ROS over a whole folder (default: the 45 OSD learn frames):
 # dasp_segment and dasp_sdasp write label PNGs per frame, then the frames are played through
 # RgbdFolderSource -> Dasp -> Sdasp and same_results.py compares the published labels.
 # Usage: dasp_ros/scripts/same_results.sh [folder] [out_dir]   (after `make build`)

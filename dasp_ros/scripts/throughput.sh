@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Throughput bar of dasp_ros (a measurement, not a test): RgbdFolderSource at 30 Hz, 640x480,
+# Throughput of dasp_ros (a measurement, not a test): RgbdFolderSource at 30 Hz, 640x480,
 # loops over a folder (default: the OSD learn frames):
 #   source   the source alone in the manager (its CPU per frame, subtracted below)
 #   pipeline Dasp + Sdasp in the same manager, DASP single-threaded: rate, frames without output, CPU

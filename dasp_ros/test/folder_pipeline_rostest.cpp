@@ -1,4 +1,4 @@
-// The bar "same results through ROS": frames played by RgbdFolderSource through Dasp and Sdasp
+// Same results through ROS: frames played by RgbdFolderSource through Dasp and Sdasp
 // give exactly the superpixel and segment labels of the core library on the same files with the
 // same (default) parameters, which is what dasp_segment and dasp_sdasp segment compute and write.
 #include <dasp/dasp.h>

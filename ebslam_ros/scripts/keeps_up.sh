@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Keeps-up bar of EventSlam2d: events at 200k and 600k events/s in 100 Hz messages for DURATION s
+# Whether EventSlam2d keeps up: events at 200k and 600k events/s in 100 Hz messages for DURATION s
 # each (default 60), N = 25, against a fresh nodelet each; prints keeps_up_bench's lines.
 #   ebslam_ros/scripts/keeps_up.sh EVENTS_FILE [DURATION] [N]
 # Needs the built workspace (.ws) and its own ROS master (started here on a free port).

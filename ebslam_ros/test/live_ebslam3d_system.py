@@ -8,7 +8,7 @@ every node of the launch is up and answers, the 3D pipeline's topics carry messa
 frames, fused depth events, EB-SLAM-3D poses and map, the rig's tf), and that no node logged an
 ERROR or FATAL (/rosout_agg and the launch's own output)."""
 import os
-import signal
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -18,6 +18,7 @@ import unittest
 
 import rosgraph
 import rosnode
+import rospkg
 import rospy
 import rostest
 from ebslam_msgs.msg import DepthEventArray, EventArray
@@ -25,6 +26,11 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import CameraInfo, PointCloud2
 from tf2_msgs.msg import TFMessage
+
+# Starting, stopping and reading launch output: ebslam_msgs/test/launch_output.py (shared with the
+# startup-policy rostest).
+sys.path.insert(0, os.path.join(rospkg.RosPack().get_path("ebslam_msgs"), "test"))
+import launch_output  # noqa: E402
 
 NODES = ["/camera/camera_manager", "/camera/rgbd_folder_source", "/camera/dasp", "/camera/sdasp",
          "/edvs/edvs_manager", "/edvs/edvs_driver", "/edvs/event_renderer", "/edvs/event_denoiser",
@@ -52,13 +58,8 @@ class LiveEbslam3dSystemTest(unittest.TestCase):
 
     def tearDown(self):
         for process in (self.launch, self.emulator):
-            if process is not None and process.poll() is None:
-                os.killpg(process.pid, signal.SIGINT)
-                try:
-                    process.wait(timeout=30)
-                except subprocess.TimeoutExpired:
-                    os.killpg(process.pid, signal.SIGKILL)
-                    process.wait()
+            launch_output.stop(process, grace_s=30)
+        shutil.rmtree(self.tmp, ignore_errors=True)
 
     def on_log(self, msg):
         if msg.level >= Log.ERROR:
@@ -89,12 +90,10 @@ class LiveEbslam3dSystemTest(unittest.TestCase):
         calibration = rospy.get_param("~calibration")
         folder = rospy.get_param("~rgbd_folder")
         with open(self.launch_log, "w") as log:
-            self.launch = subprocess.Popen(
+            self.launch = launch_output.start(
                 ["roslaunch", "ebslam_ros", "live.launch", "slam:=ebslam3d",
                  f"uri:=serial://{self.link}?format=E2", f"rgbd_folder:={folder}",
-                 f"dedvs_calibration:={calibration}"],
-                stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                start_new_session=True)
+                 f"dedvs_calibration:={calibration}"], log)
         deadline = time.monotonic() + rospy.get_param("~startup_timeout", 120.0)
 
         def all_flowing():
@@ -117,20 +116,14 @@ class LiveEbslam3dSystemTest(unittest.TestCase):
         self.assertEqual(parents.get("base_link"), "odom")
         self.assertEqual(parents.get("edvs_optical_frame"), "base_link")
         self.assertEqual(parents.get("camera_rgb_optical_frame"), "edvs_optical_frame")
-        with open(self.launch_log) as f:
-            launch_errors = [line.strip() for line in f if "[ERROR]" in line or "[FATAL]" in line
-                             or "has died" in line]
+        launch_errors = launch_output.problem_lines(launch_output.read(self.launch_log))
         rospy.loginfo("live_ebslam3d_system: %s; %d nodes of %d answer (master %s)", counts,
                       len(NODES) - len(down), len(NODES), master.getUri())
         self.assertEqual(errors, [], "ERROR/FATAL on /rosout_agg")
         self.assertEqual(launch_errors, [], "ERROR in the launch output")
 
     def tail(self):
-        try:
-            with open(self.launch_log) as f:
-                return f.read()[-3000:]
-        except OSError:
-            return ""
+        return launch_output.read(self.launch_log)[-3000:]
 
 
 if __name__ == "__main__":

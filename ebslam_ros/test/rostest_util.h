@@ -3,6 +3,7 @@
 
 #include <ebslam_msgs/EventArray.h>
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -86,6 +88,54 @@ inline void checkRep105Chain(const tf2_ros::Buffer& buffer, const std::string& s
   ASSERT_TRUE(buffer._getParent("odom", stamp, parent));
   EXPECT_EQ(parent, "map");
   EXPECT_FALSE(buffer._getParent("map", stamp, parent));
+}
+
+/// Distance [m] of two poses in the x-y plane.
+inline double planarDistance(const geometry_msgs::PoseStamped& a,
+                             const geometry_msgs::PoseStamped& b) {
+  return std::hypot(a.pose.position.x - b.pose.position.x, a.pose.position.y - b.pose.position.y);
+}
+
+/// Checks that event times never go back across `arrays` (a looping simulator's time runs on) and
+/// sets `*events` to their number. Call inside ASSERT_NO_FATAL_FAILURE.
+inline void checkEventTimesRunOn(const std::vector<ebslam_msgs::EventArray>& arrays,
+                                 std::size_t* events) {
+  ros::Time previous(0);
+  *events = 0;
+  for (const auto& a : arrays) {
+    for (const auto& e : a.events) {
+      ASSERT_GE(e.ts, previous) << "event time went back";
+      previous = e.ts;
+    }
+    *events += a.events.size();
+  }
+}
+
+/// The ground truth of a simulator driving a span of `span_ms` forth and back (~loop) from
+/// `start` (pass 0 forwards, pass 1 backwards, poses every 10 ms): continuous (consecutive poses
+/// closer than 2 cm), the pose at span + d (pass 1) equal to the pose at span - d (pass 0) for
+/// d = 50 ms, 100 ms, ... (at least 4 such pairs), and the path between 10 ms and the span's
+/// end longer than `min_motion_m` [m] (so that the mirror means something).
+inline void checkForthAndBack(const std::vector<geometry_msgs::PoseStamped>& poses,
+                              const ros::Time& start, long span_ms, double min_motion_m) {
+  std::map<long, geometry_msgs::PoseStamped> by_ms;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LT(planarDistance(poses[i], poses[i - 1]), 0.02)
+          << "jump at " << poses[i].header.stamp;
+    }
+    by_ms[std::lround((poses[i].header.stamp - start).toSec() * 1000.0)] = poses[i];
+  }
+  int mirrored = 0;
+  for (long d = 50; d < span_ms; d += 50) {
+    const auto forth = by_ms.find(span_ms - d), back = by_ms.find(span_ms + d);
+    if (forth == by_ms.end() || back == by_ms.end()) continue;
+    EXPECT_LT(planarDistance(forth->second, back->second), 1e-6) << "d = " << d << " ms";
+    ++mirrored;
+  }
+  EXPECT_GE(mirrored, 4);
+  ASSERT_TRUE(by_ms.count(10) && by_ms.count(span_ms));
+  EXPECT_GT(planarDistance(by_ms[10], by_ms[span_ms]), min_motion_m);
 }
 
 }  // namespace ebslam_ros_test

@@ -2,7 +2,7 @@
 // Parameter reading, checks and the one startup-failure policy of the workspace's nodelets (every
 // ROS package of the workspace depends on ebslam_msgs).
 //
-// Policy (README "Parameters and failures"):
+// Policy (docs/ros_nodes_notes.md, "Startup policy"):
 //   - a configuration that cannot work: the loader throws std::invalid_argument naming the fully
 //     resolved parameter and the reason; startOrFail() logs it as FATAL and rethrows from
 //     onInit(), so the nodelet is not loaded: a standalone node exits with status 1 and
