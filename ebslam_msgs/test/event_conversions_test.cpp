@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include <ebslam/event_clock.h>
+#include <ebslam/events/event_clock.h>
 
 #include <cstdint>
 #include <random>

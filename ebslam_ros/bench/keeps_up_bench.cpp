@@ -16,9 +16,9 @@
 #include <ros/ros.h>
 #include <CLI/CLI.hpp>
 
-#include <ebslam/ceiling_camera.h>
-#include <ebslam/ebslam2d.h>
-#include <ebslam/event_io.h>
+#include <ebslam/events/event_io.h>
+#include <ebslam/slam/ceiling_camera.h>
+#include <ebslam/slam/ebslam2d.h>
 
 #include <algorithm>
 #include <chrono>

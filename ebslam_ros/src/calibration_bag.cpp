@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "ebslam/event_clock.h"
+#include "ebslam/events/event_clock.h"
 #include "ebslam_msgs/EventArray.h"
 #include "ebslam_msgs/event_conversions.h"
 

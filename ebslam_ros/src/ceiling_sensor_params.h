@@ -4,7 +4,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/camera_model.h>
+#include <ebslam/slam/camera_model.h>
 
 namespace ebslam_ros {
 

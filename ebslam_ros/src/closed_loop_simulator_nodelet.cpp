@@ -21,8 +21,8 @@
 // ~clock_start + t with /clock; steps are paced at ~speed times real time (or run as fast as
 // they are simulated when that is slower). The simulation runs in a thread of its own.
 // Lockstep (~lockstep, needs ~publish_clock): the closed loop of the offline tool ebslam_explore
-// (ebslam/exploration_run.h) through ROS, independent of the machine's load. After each step the
-// simulator waits until lockstep/pose carries the stamp of the step's last event (the
+// (ebslam/simulation/exploration_run.h) through ROS, independent of the machine's load. After each
+// step the simulator waits until lockstep/pose carries the stamp of the step's last event (the
 // localisation has processed them all), then publishes /clock at the step's end and waits for the
 // next cmd_vel (the controller's step on that clock tick, e.g. Exploration with ~control_rate =
 // 1 / ~step), which drives the next step. A wait longer than ~lockstep_timeout (wall) is logged
@@ -37,10 +37,10 @@
 #include <rosgraph_msgs/Clock.h>
 #include <visualization_msgs/Marker.h>
 
-#include <ebslam/closed_loop_simulator.h>
-#include <ebslam/event_clock.h>
-#include <ebslam/floor_plan.h>
-#include <ebslam/simulator_scenes.h>
+#include <ebslam/events/event_clock.h>
+#include <ebslam/simulation/closed_loop_simulator.h>
+#include <ebslam/simulation/floor_plan.h>
+#include <ebslam/simulation/simulator_scenes.h>
 
 #include <atomic>
 #include <chrono>

@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/closed_loop_simulator.h>
+#include <ebslam/simulation/closed_loop_simulator.h>
 
 #include <string>
 

@@ -1,4 +1,4 @@
-// D-eDVS depth fusion (thesis 8.2, ebslam/dedvs_fusion.h) as a nodelet: every eDVS event gets
+// D-eDVS depth fusion (thesis 8.2, ebslam/slam/dedvs_fusion.h) as a nodelet: every eDVS event gets
 // the depth where its pixel's ray meets the depth camera's latest surface.
 // Subscriptions (relative names):
 //  - events (ebslam_msgs/EventArray): the eDVS stream;
@@ -37,7 +37,7 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
-#include <ebslam/dedvs_fusion.h>
+#include <ebslam/slam/dedvs_fusion.h>
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_msgs/EventArray.h>
 

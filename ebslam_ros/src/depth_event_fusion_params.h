@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/dedvs_fusion.h>
+#include <ebslam/slam/dedvs_fusion.h>
 
 #include <string>
 

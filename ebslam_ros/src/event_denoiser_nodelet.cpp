@@ -1,4 +1,4 @@
-// Background-activity filter (ebslam/event_denoiser.h) as a nodelet: subscribes `events`
+// Background-activity filter (ebslam/events/event_denoiser.h) as a nodelet: subscribes `events`
 // (ebslam_msgs/EventArray) and publishes `events_denoised` (ebslam_msgs/EventArray), one message
 // per input message with the input's header (stamp, frame) and width x height, holding the events
 // that pass, unchanged and in order (an empty input gives an empty output).
@@ -18,7 +18,7 @@
 #include <ros/ros.h>
 #include <boost/thread/recursive_mutex.hpp>
 
-#include <ebslam/event_denoiser.h>
+#include <ebslam/events/event_denoiser.h>
 #include <ebslam_msgs/EventArray.h>
 
 #include <algorithm>

@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/event_denoiser.h>
+#include <ebslam/events/event_denoiser.h>
 
 namespace ebslam_ros {
 

@@ -16,8 +16,8 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
-#include <ebslam/event_clock.h>
-#include <ebslam/event_io.h>
+#include <ebslam/events/event_clock.h>
+#include <ebslam/events/event_io.h>
 
 #include <algorithm>
 #include <cmath>

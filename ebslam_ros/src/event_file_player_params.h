@@ -3,8 +3,8 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/event.h>
-#include <ebslam/event_io.h>
+#include <ebslam/events/event.h>
+#include <ebslam/events/event_io.h>
 
 #include <optional>
 #include <string>

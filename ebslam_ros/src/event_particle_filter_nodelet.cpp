@@ -6,8 +6,8 @@
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 
-#include <ebslam/ceiling_camera.h>
-#include <ebslam/ebpf.h>
+#include <ebslam/slam/ceiling_camera.h>
+#include <ebslam/slam/ebpf.h>
 
 #include <memory>
 #include <pluginlib/class_list_macros.hpp>

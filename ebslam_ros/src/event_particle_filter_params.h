@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/ebpf.h>
+#include <ebslam/slam/ebpf.h>
 
 #include <string>
 

@@ -22,9 +22,9 @@
 #include <ros/package.h>
 #include <ros/ros.h>
 
-#include <ebslam/simulator.h>
-#include <ebslam/simulator_scenes.h>
-#include <ebslam/trajectory.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/simulation/simulator.h>
+#include <ebslam/simulation/simulator_scenes.h>
 
 #include <opencv2/imgcodecs.hpp>
 

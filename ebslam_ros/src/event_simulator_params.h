@@ -3,8 +3,8 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/simulator.h>
-#include <ebslam/simulator_scenes.h>
+#include <ebslam/simulation/simulator.h>
+#include <ebslam/simulation/simulator_scenes.h>
 
 #include <string>
 #include <vector>

@@ -20,8 +20,8 @@
 #include <ros/ros.h>
 #include <sensor_msgs/Image.h>
 
-#include <ebslam/ceiling_camera.h>
-#include <ebslam/ebslam2d.h>
+#include <ebslam/slam/ceiling_camera.h>
+#include <ebslam/slam/ebslam2d.h>
 
 #include <ebslam_msgs/SaveMap.h>
 

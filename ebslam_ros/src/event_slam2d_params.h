@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/ebslam2d.h>
+#include <ebslam/slam/ebslam2d.h>
 
 #include "pose_filter_params.h"
 

@@ -1,5 +1,5 @@
 // EB-SLAM-3D (thesis 8.3, alg. 9): a depth-event sensor (D-eDVS) localises itself in 6 DoF
-// against a voxel occurrence map it builds from the same events (ebslam/ebslam3d.h).
+// against a voxel occurrence map it builds from the same events (ebslam/slam/ebslam3d.h).
 //
 // Frames (REP 105): map -> odom -> base_link -> sensor_frame. The core estimates the pose of the
 // sensor's optical frame; the mounting base_link -> sensor_frame (parameters or tf) turns it into
@@ -20,7 +20,7 @@
 #include <std_srvs/Trigger.h>
 #include <boost/thread/recursive_mutex.hpp>
 
-#include <ebslam/ebslam3d.h>
+#include <ebslam/slam/ebslam3d.h>
 
 #include <Eigen/Geometry>
 

@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/ebslam3d.h>
+#include <ebslam/slam/ebslam3d.h>
 
 #include <array>
 #include <cmath>

@@ -32,7 +32,7 @@
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <ebslam/exploration.h>
+#include <ebslam/slam/exploration.h>
 
 #include <algorithm>
 #include <cmath>

@@ -10,10 +10,10 @@
 #include <ebslam_msgs/ResetPose.h>
 #include <boost/thread/recursive_mutex.hpp>
 
-#include <ebslam/event_denoiser.h>
-#include <ebslam/event_filter.h>
-#include <ebslam/particle_set2d.h>
-#include <ebslam/pose.h>
+#include <ebslam/events/event_denoiser.h>
+#include <ebslam/events/pose.h>
+#include <ebslam/slam/event_filter.h>
+#include <ebslam/slam/particle_set2d.h>
 
 #include <cstdint>
 #include <functional>

@@ -4,9 +4,9 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/event_denoiser.h>
-#include <ebslam/event_filter.h>
-#include <ebslam/pose.h>
+#include <ebslam/events/event_denoiser.h>
+#include <ebslam/slam/event_filter.h>
+#include <ebslam/events/pose.h>
 
 #include "ceiling_sensor_params.h"
 #include "pose_node_params.h"

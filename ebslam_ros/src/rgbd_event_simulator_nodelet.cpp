@@ -1,6 +1,7 @@
-// Simulated D-eDVS (thesis 8.2, ebslam/dedvs_simulator.h): an eDVS 128x128 and a PrimeSense-like
-// depth camera with registered colour on a hand-held rig moving along a TUM trajectory through
-// a furnished room (ebslam/dedvs_scene.h). Publications (relative names):
+// Simulated D-eDVS (thesis 8.2, ebslam/simulation/dedvs_simulator.h): an eDVS 128x128 and a
+// PrimeSense-like depth camera with registered colour on a hand-held rig moving along a TUM
+// trajectory through a furnished room (ebslam/simulation/dedvs_scene.h). Publications (relative
+// names):
 //  - events (ebslam_msgs/EventArray): ~publish_rate messages per simulated second in
 //    ~edvs_frame; header.stamp = ts of the last event;
 //  - depth_registered/image_raw (sensor_msgs/Image 16UC1, millimetres, 0 = no depth) and
@@ -26,10 +27,10 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 
-#include <ebslam/dedvs_io.h>
-#include <ebslam/dedvs_scene.h>
-#include <ebslam/dedvs_simulator.h>
-#include <ebslam/trajectory.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/simulation/dedvs_io.h>
+#include <ebslam/simulation/dedvs_scene.h>
+#include <ebslam/simulation/dedvs_simulator.h>
 
 #include <algorithm>
 #include <atomic>

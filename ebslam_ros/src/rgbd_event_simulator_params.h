@@ -3,8 +3,8 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/dedvs_scene.h>
-#include <ebslam/dedvs_simulator.h>
+#include <ebslam/simulation/dedvs_scene.h>
+#include <ebslam/simulation/dedvs_simulator.h>
 
 #include <string>
 #include <vector>

@@ -19,10 +19,10 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <ebslam/dedvs_io.h>
-#include <ebslam/ebslam3d.h>
-#include <ebslam/trajectory.h>
-#include <ebslam/trajectory_evaluation.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/events/trajectory_evaluation.h>
+#include <ebslam/simulation/dedvs_io.h>
+#include <ebslam/slam/ebslam3d.h>
 
 #include <Eigen/Geometry>
 

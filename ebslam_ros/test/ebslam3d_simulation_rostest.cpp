@@ -14,9 +14,9 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
-#include <ebslam/dedvs_io.h>
-#include <ebslam/trajectory.h>
-#include <ebslam/trajectory_evaluation.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/events/trajectory_evaluation.h>
+#include <ebslam/simulation/dedvs_io.h>
 
 #include <Eigen/Geometry>
 

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
-#include <ebslam/event_denoiser.h>
+#include <ebslam/events/event_denoiser.h>
 
 #include <algorithm>
 #include <map>

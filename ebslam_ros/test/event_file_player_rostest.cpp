@@ -2,7 +2,7 @@
 // time differences (scaled by the playback speed), with the configured frame and sensor size;
 // from a file with damaged times, every valid event and none of the damaged ones. A player that
 // cannot start stops with a FATAL reason naming the cause.
-#include <ebslam/event_io.h>
+#include <ebslam/events/event_io.h>
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "ebslam/event_clock.h"
+#include "ebslam/events/event_clock.h"
 #include "ebslam_msgs/event_conversions.h"
 
 namespace {

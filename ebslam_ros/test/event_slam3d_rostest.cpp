@@ -1,8 +1,8 @@
 // rostest of the EventSlam3d nodelet (event_slam3d.test). The test publishes the depth events of
 // a sensor moving along a known path in the synthetic textured room of
-// ebslam/synthetic_depth_events.h and asserts the outputs' content (pose against the path, map
-// cloud on the room's edges), frames, stamps (the last event's time), the tf tree, the lazy
-// topics, the services and the knobs, and that injected bad input is reported and handled with
+// ebslam/simulation/synthetic_depth_events.h and asserts the outputs' content (pose against the
+// path, map cloud on the room's edges), frames, stamps (the last event's time), the tf tree, the
+// lazy topics, the services and the knobs, and that injected bad input is reported and handled with
 // the node running on. Every wait is for a message, with generous wall-time limits.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
@@ -18,9 +18,9 @@
 #include <tf2_ros/transform_listener.h>
 #include <unistd.h>
 
-#include <ebslam/ebslam3d.h>
-#include <ebslam/synthetic_depth_events.h>
-#include <ebslam/trajectory.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/simulation/synthetic_depth_events.h>
+#include <ebslam/slam/ebslam3d.h>
 
 #include <Eigen/Geometry>
 

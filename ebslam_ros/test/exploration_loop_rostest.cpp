@@ -1,8 +1,8 @@
 // rostest of the exploration closed loop through ROS (exploration_loop.test includes
 // launch/exploration.launch): ClosedLoopSimulator -> EventSlam2d -> Exploration -> cmd_vel for
 // ~duration simulated seconds, measured as the offline tool ebslam_explore measures a run
-// (ebslam/exploration_run.h): the covered fraction of the reachable free area swept by the robot's
-// true disc (CoverageRaster, 2 cm cells) and EB-SLAM's position error, aligned RMSE
+// (ebslam/simulation/exploration_run.h): the covered fraction of the reachable free area swept by
+// the robot's true disc (CoverageRaster, 2 cm cells) and EB-SLAM's position error, aligned RMSE
 // (evaluateTrajectory, no time offset, 0.1 s association gap) and raw RMSE, associated by
 // header.stamp (estimate = /ebslam/pose in map, ground truth = /ground_truth/pose in map).
 // Asserts both within the range of the offline runs (parameters ~min_covered, ~max_rmse). With
@@ -12,11 +12,11 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
-#include <ebslam/exploration_run.h>
-#include <ebslam/floor_plan.h>
-#include <ebslam/simulator_scenes.h>
-#include <ebslam/trajectory.h>
-#include <ebslam/trajectory_evaluation.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/events/trajectory_evaluation.h>
+#include <ebslam/simulation/exploration_run.h>
+#include <ebslam/simulation/floor_plan.h>
+#include <ebslam/simulation/simulator_scenes.h>
 
 #include <algorithm>
 #include <cmath>

@@ -23,7 +23,7 @@
 #include <filesystem>
 #include <string>
 
-#include "ebslam/dedvs_io.h"
+#include "ebslam/simulation/dedvs_io.h"
 #include "ebslam_ros/calibration_bag.h"
 
 namespace {

@@ -39,11 +39,11 @@
 #include <utility>
 #include <vector>
 
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/event_clock.h"
-#include "ebslam/simulator_scenes.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/event_clock.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/conversions.h"
 

@@ -2,9 +2,9 @@
 // diagnostics; biases and publishing rate through dynamic_reconfigure. The link (open, reconnect
 // with backoff, stall detection, reading, the event clock) is edvs::LinkSupervisor's, on its own
 // thread, never in a callback of the nodelet manager.
-// Time semantics: see README.md and ebslam/event_clock.h. Event ts = ROS time of the read that
-// delivered the first event of the stream (the anchor, taken once per stream) + (unwrapped device
-// time - device time of that first event). Never runs backwards, not even across reconnects.
+// Time semantics: see README.md and ebslam/events/event_clock.h. Event ts = ROS time of the read
+// that delivered the first event of the stream (the anchor, taken once per stream) + (unwrapped
+// device time - device time of that first event). Never runs backwards, not even across reconnects.
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>

@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 #include "edvs/emulator.h"
 #include "edvs_driver/bag_io.h"
 #include "edvs_driver/ros_params.h"

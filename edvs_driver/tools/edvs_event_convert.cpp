@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <optional>
 
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 #include "edvs_driver/bag_io.h"
 
 namespace {

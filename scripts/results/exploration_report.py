@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pagegen  # noqa: E402
 
 def read_plan(path):
-    """Returns (name, walls, obstacles) of a floor-plan file (format: src/ebslam/floor_plan.h)."""
+    """Returns (name, walls, obstacles) of a floor-plan file (format: src/ebslam/include/ebslam/simulation/floor_plan.h)."""
     name, polygons, current = os.path.splitext(os.path.basename(path))[0], [], None
     for raw in open(path):
         fields = raw.split("#")[0].split()

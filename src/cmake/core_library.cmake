@@ -8,6 +8,12 @@
 #   ... find_package(...) ...
 #   core_library_add(<name> <PREFIX> <public link libraries>...)
 #   ... library-specific settings ...
+# A core split by dependency instead builds one static library per component and an interface
+# target <name>::<name> that links them all (in place of core_library_add):
+#   core_library_component(<name> <PREFIX> <component> <public link libraries>...)   # per component
+#   core_library_umbrella(<name> <PREFIX>)
+# Component <c>: sources src/<c>/*.cpp, headers include/<name>/<c>/, target <name>_<c>, exported
+# as <name>::<c>.
 #   core_library_end(<name> <PREFIX>)      # tools, benchmarks, tests, install and export
 # Extra libraries for the tools, benchmarks and tests: <PREFIX>_TOOL_LIBS, <PREFIX>_BENCH_LIBS,
 # <PREFIX>_TEST_LIBS (set them before core_library_end, e.g. in cmake/<name>_extras.cmake).
@@ -42,6 +48,29 @@ macro(core_library_add name prefix)
   target_link_libraries(${name} PUBLIC ${ARGN})
   target_compile_options(${name} PRIVATE ${${prefix}_WARNINGS})
   target_compile_features(${name} PUBLIC cxx_std_17)
+endmacro()
+
+# One component of a core split by dependency (see the top of this file).
+macro(core_library_component name prefix component)
+  file(GLOB ${prefix}_${component}_SOURCES CONFIGURE_DEPENDS
+       ${CMAKE_CURRENT_SOURCE_DIR}/src/${component}/*.cpp)
+  add_library(${name}_${component} STATIC ${${prefix}_${component}_SOURCES})
+  add_library(${name}::${component} ALIAS ${name}_${component})
+  set_target_properties(${name}_${component} PROPERTIES EXPORT_NAME ${component})
+  target_include_directories(${name}_${component} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:include>)
+  target_link_libraries(${name}_${component} PUBLIC ${ARGN})
+  target_compile_options(${name}_${component} PRIVATE ${${prefix}_WARNINGS})
+  target_compile_features(${name}_${component} PUBLIC cxx_std_17)
+  list(APPEND ${prefix}_COMPONENTS ${name}_${component})
+endmacro()
+
+# <name>::<name> of a split core: an interface target linking every component.
+macro(core_library_umbrella name prefix)
+  add_library(${name} INTERFACE)
+  add_library(${name}::${name} ALIAS ${name})
+  target_link_libraries(${name} INTERFACE ${${prefix}_COMPONENTS})
 endmacro()
 
 macro(core_library_end name prefix)
@@ -99,10 +128,11 @@ macro(core_library_end name prefix)
     endif()
   endif()
 
-  # Install and export <name>::<name> so that find_package(<name>) works from another project.
+  # Install and export <name>::<name> (and a split core's <name>::<component>) so that
+  # find_package(<name>) works from another project.
   include(GNUInstallDirs)
   include(CMakePackageConfigHelpers)
-  install(TARGETS ${name} EXPORT ${name}Targets
+  install(TARGETS ${name} ${${prefix}_COMPONENTS} EXPORT ${name}Targets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
   install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})

@@ -7,7 +7,7 @@
 // frame_id = the sensor's optical frame, width x height = the sensor.
 // Details: docs/ros_nodes_notes.md#event-conversions
 
-#include <ebslam/event.h>
+#include <ebslam/events/event.h>
 #include <ebslam_msgs/Event.h>
 #include <ebslam_msgs/EventArray.h>
 #include <ros/time.h>

@@ -2,7 +2,7 @@
 // Pose topics recorded in a bag -> TUM trajectories, so that ebslam_evaluate_trajectory scores
 // what the nodes published (tool: ebslam_ros bag_to_tum).
 
-#include <ebslam/trajectory.h>
+#include <ebslam/events/trajectory.h>
 
 #include <cstddef>
 #include <string>

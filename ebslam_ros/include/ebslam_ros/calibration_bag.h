@@ -4,17 +4,17 @@
 // bag that proves it without hardware. The bag carries the sensors' topics as record.launch
 // records them: eDVS events (ebslam_msgs/EventArray), the colour image (bgr8, rgb8, mono8 or
 // bgra8), the depth image registered to it (16UC1 mm or 32FC1 m) and its camera_info. The
-// LED finding, pairing and solving are the core's (ebslam/dedvs_rgbd_led.h,
-// ebslam/dedvs_calibration.h); this file only reads and writes bags.
+// LED finding, pairing and solving are the core's (ebslam/calibration/dedvs_rgbd_led.h,
+// ebslam/calibration/dedvs_calibration.h); this file only reads and writes bags.
 
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
 
-#include "ebslam/dedvs_calibration.h"
-#include "ebslam/dedvs_io.h"
-#include "ebslam/dedvs_rgbd_led.h"
+#include "ebslam/calibration/dedvs_calibration.h"
+#include "ebslam/calibration/dedvs_rgbd_led.h"
+#include "ebslam/simulation/dedvs_io.h"
 
 namespace ebslam_ros {
 

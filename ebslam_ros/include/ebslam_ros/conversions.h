@@ -15,7 +15,7 @@
 #include <std_msgs/Header.h>
 #include <tf2/LinearMath/Transform.h>
 
-#include <ebslam/pose.h>
+#include <ebslam/events/pose.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>

@@ -7,12 +7,12 @@
 // the ROS pipeline (playback.launch slam:=ebslam3d) is compared with (rostest
 // ebslam3d_playback.test, tool dedvs_session_eval, make demo).
 
-#include <ebslam/dedvs_fusion.h>
-#include <ebslam/dedvs_io.h>
-#include <ebslam/ebslam3d.h>
-#include <ebslam/event.h>
-#include <ebslam/trajectory.h>
-#include <ebslam/trajectory_evaluation.h>
+#include <ebslam/events/event.h>
+#include <ebslam/events/trajectory.h>
+#include <ebslam/events/trajectory_evaluation.h>
+#include <ebslam/simulation/dedvs_io.h>
+#include <ebslam/slam/dedvs_fusion.h>
+#include <ebslam/slam/ebslam3d.h>
 
 #include <opencv2/core.hpp>
 

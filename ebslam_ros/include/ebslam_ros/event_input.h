@@ -7,8 +7,8 @@
 // restarts the filter nor makes the next real event look like a pause of decades.
 // Details: docs/ros_nodes_notes.md#event-input-checks
 
-#include <ebslam/ebslam3d.h>
-#include <ebslam/event.h>
+#include <ebslam/events/event.h>
+#include <ebslam/slam/ebslam3d.h>
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_msgs/EventArray.h>
 

@@ -8,7 +8,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
-#include <ebslam/trajectory.h>
+#include <ebslam/events/trajectory.h>
 
 #include <cstddef>
 #include <deque>

@@ -8,8 +8,8 @@
 #include <ebslam_msgs/event_conversions.h>
 #include <ros/ros.h>
 
-#include <ebslam/event.h>
-#include <ebslam/event_clock.h>
+#include <ebslam/events/event.h>
+#include <ebslam/events/event_clock.h>
 
 #include <atomic>
 #include <cstdint>

@@ -1,14 +1,14 @@
 #pragma once
 
 // Event bags: ebslam_msgs/EventArray messages in a rosbag <-> events. Together with
-// ebslam/event_io.h (binary, text, Event Camera Dataset text) this makes `bag` one more event
-// file format for edvs_event_convert.
+// ebslam/events/event_io.h (binary, text, Event Camera Dataset text) this makes `bag` one more
+// event file format for edvs_event_convert.
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 
 namespace edvs_driver {
 

@@ -8,10 +8,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ebslam/dedvs_fusion.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/slam/dedvs_fusion.h"
 
 namespace {
 

@@ -17,9 +17,9 @@
 #include <utility>
 
 #include "../test/synthetic_ceiling.h"
-#include "ebslam/ebpf.h"
-#include "ebslam/ebslam2d.h"
-#include "ebslam/event_denoiser.h"
+#include "ebslam/events/event_denoiser.h"
+#include "ebslam/slam/ebpf.h"
+#include "ebslam/slam/ebslam2d.h"
 
 namespace {
 

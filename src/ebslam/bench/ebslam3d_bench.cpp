@@ -12,8 +12,8 @@
 
 #include <cmath>
 
-#include "ebslam/ebslam3d.h"
-#include "ebslam/synthetic_depth_events.h"
+#include "ebslam/simulation/synthetic_depth_events.h"
+#include "ebslam/slam/ebslam3d.h"
 
 namespace {
 

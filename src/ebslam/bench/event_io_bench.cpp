@@ -11,7 +11,7 @@
 #include <random>
 #include <string>
 
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 
 namespace {
 

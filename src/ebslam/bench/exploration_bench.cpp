@@ -8,11 +8,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ebslam/ceiling_camera.h"
-#include "ebslam/closed_loop_simulator.h"
-#include "ebslam/ebslam2d.h"
-#include "ebslam/exploration.h"
-#include "ebslam/floor_plan.h"
+#include "ebslam/simulation/closed_loop_simulator.h"
+#include "ebslam/simulation/floor_plan.h"
+#include "ebslam/slam/ceiling_camera.h"
+#include "ebslam/slam/ebslam2d.h"
+#include "ebslam/slam/exploration.h"
 
 namespace {
 

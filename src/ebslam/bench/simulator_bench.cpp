@@ -6,8 +6,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
 
 namespace {
 

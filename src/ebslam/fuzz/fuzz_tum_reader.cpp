@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::string path = "/dev/shm/ebslam_fuzz_tum_" + std::to_string(::getpid());

@@ -24,8 +24,8 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undef
        -fno-sanitize-recover=undefined -I"${lib}/include" -isystem /usr/include/eigen3)
 
 declare -A sources=(
-  [fuzz_event_reader]="${lib}/src/event_io.cpp"
-  [fuzz_tum_reader]="${lib}/src/trajectory.cpp"
+  [fuzz_event_reader]="${lib}/src/events/event_io.cpp ${lib}/src/events/event_file_writer.cpp"
+  [fuzz_tum_reader]="${lib}/src/events/trajectory.cpp"
 )
 
 status=0

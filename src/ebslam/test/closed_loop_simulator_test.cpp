@@ -5,10 +5,10 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/closed_loop_simulator.h"
-#include "ebslam/floor_plan.h"
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
+#include "ebslam/simulation/closed_loop_simulator.h"
+#include "ebslam/simulation/floor_plan.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
 
 namespace ebslam {
 namespace {

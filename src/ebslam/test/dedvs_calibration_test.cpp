@@ -1,4 +1,4 @@
-#include "ebslam/dedvs_calibration.h"
+#include "ebslam/calibration/dedvs_calibration.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/dedvs_io.h"
+#include "ebslam/simulation/dedvs_io.h"
 
 namespace ebslam {
 namespace {

@@ -3,9 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/dedvs_fusion.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/slam/dedvs_fusion.h"
 
 namespace ebslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "ebslam/dedvs_rgbd_led.h"
+#include "ebslam/calibration/dedvs_rgbd_led.h"
 
 #include <cmath>
 #include <random>

@@ -7,11 +7,11 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/camera_model.h"
-#include "ebslam/dedvs_io.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/slam/camera_model.h"
 
 namespace ebslam {
 namespace {

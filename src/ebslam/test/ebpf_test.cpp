@@ -1,4 +1,4 @@
-#include "ebslam/ebpf.h"
+#include "ebslam/slam/ebpf.h"
 
 #include <cmath>
 #include <limits>

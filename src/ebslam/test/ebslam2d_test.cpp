@@ -1,4 +1,4 @@
-#include "ebslam/ebslam2d.h"
+#include "ebslam/slam/ebslam2d.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/trajectory_evaluation.h"
 #include "synthetic_ceiling.h"
 
 namespace ebslam {

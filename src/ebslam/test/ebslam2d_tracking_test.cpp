@@ -1,4 +1,4 @@
-#include "ebslam/ebslam2d_tracking.h"
+#include "ebslam/slam/ebslam2d_tracking.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -12,10 +12,10 @@
 #include <tuple>
 #include <vector>
 
-#include "ebslam/ebslam3d.h"
-#include "ebslam/synthetic_depth_events.h"
-#include "ebslam/trajectory_evaluation.h"
-#include "ebslam/voxel_map.h"
+#include "ebslam/events/trajectory_evaluation.h"
+#include "ebslam/simulation/synthetic_depth_events.h"
+#include "ebslam/slam/ebslam3d.h"
+#include "ebslam/slam/voxel_map.h"
 
 namespace ebslam {
 namespace {

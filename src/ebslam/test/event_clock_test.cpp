@@ -1,4 +1,4 @@
-#include "ebslam/event_clock.h"
+#include "ebslam/events/event_clock.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "ebslam/event_denoiser.h"
+#include "ebslam/events/event_denoiser.h"
 
 #include <cmath>
 #include <random>
@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
 
 namespace ebslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 
 #include <gtest/gtest.h>
 

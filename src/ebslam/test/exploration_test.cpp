@@ -6,9 +6,9 @@
 
 #include <gtest/gtest.h>
 
-#include "ebslam/exploration.h"
-#include "ebslam/exploration_run.h"
-#include "ebslam/floor_plan.h"
+#include "ebslam/simulation/exploration_run.h"
+#include "ebslam/simulation/floor_plan.h"
+#include "ebslam/slam/exploration.h"
 
 namespace ebslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "ebslam/exponential_decay.h"
+#include "ebslam/slam/exponential_decay.h"
 
 #include <cmath>
 #include <random>

@@ -1,4 +1,4 @@
-#include "ebslam/handheld_motions.h"
+#include "ebslam/simulation/handheld_motions.h"
 
 #include <gtest/gtest.h>
 

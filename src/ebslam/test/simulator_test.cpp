@@ -9,11 +9,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "ebslam/camera_model.h"
-#include "ebslam/ebpf.h"
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
+#include "ebslam/slam/camera_model.h"
+#include "ebslam/slam/ebpf.h"
 
 namespace ebslam {
 namespace {

@@ -15,9 +15,9 @@
 #include <Eigen/Core>
 #include <opencv2/imgproc.hpp>
 
-#include "ebslam/ceiling_camera.h"
-#include "ebslam/event.h"
-#include "ebslam/particle_set2d.h"
+#include "ebslam/events/event.h"
+#include "ebslam/slam/ceiling_camera.h"
+#include "ebslam/slam/particle_set2d.h"
 
 namespace ebslam::testing {
 

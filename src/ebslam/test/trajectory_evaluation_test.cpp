@@ -1,4 +1,4 @@
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/trajectory_evaluation.h"
 
 #include <gtest/gtest.h>
 

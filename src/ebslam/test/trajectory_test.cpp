@@ -1,4 +1,4 @@
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
 
 #include <gtest/gtest.h>
 

@@ -34,8 +34,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ebslam/dedvs_calibration.h"
-#include "ebslam/dedvs_io.h"
+#include "ebslam/calibration/dedvs_calibration.h"
+#include "ebslam/simulation/dedvs_io.h"
 
 namespace {
 

@@ -21,10 +21,11 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ebslam/dedvs_fusion.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/slam/dedvs_fusion.h"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // Simulates the D-eDVS (thesis 8.2) carried along a hand-held TUM trajectory through a
-// furnished room and writes the run as files (layout in ebslam/dedvs_io.h): events with true
-// depth, depth and colour frames, ground-truth trajectories, sensors.yaml.
+// furnished room and writes the run as files (layout in ebslam/simulation/dedvs_io.h): events with
+// true depth, depth and colour frames, ground-truth trajectories, sensors.yaml.
 //
 // Example:
 //   ebslam_dedvs_simulate --trajectory rgbd_dataset_freiburg1_desk-groundtruth.txt
@@ -15,10 +15,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ebslam/dedvs_io.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"Simulate the D-eDVS (eDVS + depth camera) along a TUM trajectory in a room"};

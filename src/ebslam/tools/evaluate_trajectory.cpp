@@ -11,8 +11,8 @@
 #include <exception>
 #include <string>
 
-#include "ebslam/trajectory.h"
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/events/trajectory_evaluation.h"
 
 int main(int argc, char** argv) {
   CLI::App app{

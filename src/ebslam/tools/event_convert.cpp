@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 
 namespace {
 

@@ -31,15 +31,15 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ebslam/dedvs_fusion.h"
-#include "ebslam/dedvs_io.h"
-#include "ebslam/dedvs_scene.h"
-#include "ebslam/dedvs_simulator.h"
-#include "ebslam/ebslam3d.h"
-#include "ebslam/handheld_motions.h"
-#include "ebslam/synthetic_depth_events.h"
-#include "ebslam/trajectory.h"
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/events/trajectory_evaluation.h"
+#include "ebslam/simulation/dedvs_io.h"
+#include "ebslam/simulation/dedvs_scene.h"
+#include "ebslam/simulation/dedvs_simulator.h"
+#include "ebslam/simulation/handheld_motions.h"
+#include "ebslam/simulation/synthetic_depth_events.h"
+#include "ebslam/slam/dedvs_fusion.h"
+#include "ebslam/slam/ebslam3d.h"
 
 namespace {
 

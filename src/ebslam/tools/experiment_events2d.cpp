@@ -34,14 +34,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "ebslam/ebpf.h"
-#include "ebslam/ebslam2d.h"
-#include "ebslam/event_denoiser.h"
-#include "ebslam/event_io.h"
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
-#include "ebslam/trajectory.h"
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/event_denoiser.h"
+#include "ebslam/events/event_io.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/events/trajectory_evaluation.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
+#include "ebslam/slam/ebpf.h"
+#include "ebslam/slam/ebslam2d.h"
 #include "filter_tool_common.h"
 
 namespace fs = std::filesystem;

@@ -17,8 +17,8 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "ebslam/exploration_run.h"
-#include "ebslam/trajectory_evaluation.h"
+#include "ebslam/events/trajectory_evaluation.h"
+#include "ebslam/simulation/exploration_run.h"
 
 namespace fs = std::filesystem;
 

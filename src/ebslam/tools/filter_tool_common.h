@@ -13,11 +13,11 @@
 
 #include <Eigen/Geometry>
 
-#include "ebslam/camera_model.h"
-#include "ebslam/ceiling_camera.h"
-#include "ebslam/event_filter.h"
-#include "ebslam/event_io.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/event_io.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/slam/camera_model.h"
+#include "ebslam/slam/ceiling_camera.h"
+#include "ebslam/slam/event_filter.h"
 
 namespace ebslam::tools {
 

@@ -14,8 +14,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "ebslam/ebpf.h"
-#include "ebslam/ebslam2d.h"
+#include "ebslam/slam/ebpf.h"
+#include "ebslam/slam/ebslam2d.h"
 #include "filter_tool_common.h"
 
 int main(int argc, char** argv) {

@@ -12,7 +12,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "ebslam/ebslam2d.h"
+#include "ebslam/slam/ebslam2d.h"
 #include "filter_tool_common.h"
 
 int main(int argc, char** argv) {

@@ -19,10 +19,10 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "ebslam/event_io.h"
-#include "ebslam/simulator.h"
-#include "ebslam/simulator_scenes.h"
-#include "ebslam/trajectory.h"
+#include "ebslam/events/event_io.h"
+#include "ebslam/events/trajectory.h"
+#include "ebslam/simulation/simulator.h"
+#include "ebslam/simulation/simulator_scenes.h"
 
 namespace {
 

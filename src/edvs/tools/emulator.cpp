@@ -13,7 +13,7 @@
 #include <set>
 #include <thread>
 
-#include "ebslam/event_io.h"
+#include "ebslam/events/event_io.h"
 #include "edvs/emulator.h"
 
 namespace {

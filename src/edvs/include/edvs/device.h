@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/biases.h"
 #include "edvs/commands.h"
 #include "edvs/event_format.h"

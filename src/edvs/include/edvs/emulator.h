@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/event_encoder.h"  // the device side: what it sends, tests encode alike
 #include "edvs/event_format.h"
 

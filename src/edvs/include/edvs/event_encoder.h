@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/event_format.h"
 
 namespace edvs {

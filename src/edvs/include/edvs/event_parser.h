@@ -2,7 +2,7 @@
 
 // Incremental parser of the eDVS4337 event stream: framing with resync, 64-bit timestamp
 // unwrapping, framing by evidence for the absolute formats. ROS-free; depends only on
-// ebslam/event.h. The wire layout: edvs/event_format.h.
+// ebslam/events/event.h. The wire layout: edvs/event_format.h.
 
 #include <climits>
 #include <cstddef>
@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 #include "edvs/event_format.h"
 #include "edvs/timestamp_unwrapper.h"
 

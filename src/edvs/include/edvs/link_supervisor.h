@@ -19,8 +19,8 @@
 #include <utility>
 #include <vector>
 
-#include "ebslam/event.h"
-#include "ebslam/event_clock.h"
+#include "ebslam/events/event.h"
+#include "ebslam/events/event_clock.h"
 #include "edvs/device.h"
 
 namespace edvs {

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ebslam/event.h"
+#include "ebslam/events/event.h"
 
 namespace edvs {
 

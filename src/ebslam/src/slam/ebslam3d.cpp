@@ -1,0 +1,582 @@
+#include "ebslam/slam/ebslam3d.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace ebslam {
+
+Ebslam3dConfig Ebslam3dConfig::fast() {
+  Ebslam3dConfig c;
+  c.num_particles = 50;
+  c.batch_size = 10;
+  c.max_event_rate = 35000.0;
+  return c;
+}
+
+Ebslam3dConfig Ebslam3dConfig::thesis() {
+  Ebslam3dConfig c;
+  c.num_particles = 100;
+  c.batch_size = 3;
+  c.resample_every = 100;
+  c.event_share = 1.0;
+  c.max_event_rate = 0.0;
+  c.voxel_size_m = 0.01;
+  c.sigma_position_m = 1e-3;
+  c.sigma_rotation_rad = 1e-3;
+  c.sigma_position_per_sqrt_s = 0.0;
+  c.sigma_rotation_per_sqrt_s = 0.0;
+  c.diffusion_min_scale = 1.0;
+  c.diffusion_max_scale = 1.0;
+  return c;
+}
+
+void Ebslam3dConfig::validate() const {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("Ebslam3dConfig: " + what);
+  };
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (num_particles < 1 || num_particles > 100000) fail("num_particles must be in [1, 100000]");
+  if (batch_size < 1 || batch_size > 64) fail("batch_size must be in [1, 64]");
+  if (resample_every < 1) fail("resample_every must be at least 1");
+  if (!(event_share > 0.0 && event_share <= 1.0)) fail("event_share must be in (0, 1]");
+  if (!(sigma_position_m >= 0.0) || !std::isfinite(sigma_position_m)) {
+    fail("sigma_position_m must be finite and >= 0");
+  }
+  if (!(sigma_rotation_rad >= 0.0 && sigma_rotation_rad < 1.0)) {
+    fail("sigma_rotation_rad must be in [0, 1)");
+  }
+  if (!(max_event_rate >= 0.0) || !std::isfinite(max_event_rate)) {
+    fail("max_event_rate must be finite and >= 0");
+  }
+  if (!positive(rate_window_s)) fail("rate_window_s must be positive");
+  if (!(sigma_position_per_sqrt_s >= 0.0) || !std::isfinite(sigma_position_per_sqrt_s)) {
+    fail("sigma_position_per_sqrt_s must be finite and >= 0");
+  }
+  if (!(sigma_rotation_per_sqrt_s >= 0.0 && sigma_rotation_per_sqrt_s < 10.0)) {
+    fail("sigma_rotation_per_sqrt_s must be in [0, 10)");
+  }
+  if (!positive(max_diffusion_dt_s)) fail("max_diffusion_dt_s must be positive");
+  if (!(diffusion_min_scale >= 0.0 && diffusion_min_scale <= diffusion_max_scale &&
+        std::isfinite(diffusion_max_scale) && diffusion_max_scale <= 100.0)) {
+    fail("need 0 <= diffusion_min_scale <= diffusion_max_scale <= 100");
+  }
+  if (!positive(reference_angular_speed) || !positive(reference_linear_speed)) {
+    fail("reference_angular_speed and reference_linear_speed must be positive");
+  }
+  if (!positive(motion_window_s) || !positive(motion_time_s)) {
+    fail("motion_window_s and motion_time_s must be positive");
+  }
+  if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
+      !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
+      !std::isfinite(health.warmup_s)) {
+    fail("health: the times must be positive (warmup_s >= 0) and finite");
+  }
+  if (!(health.lost_ratio > 0.0 && health.lost_ratio <= health.recover_ratio &&
+        std::isfinite(health.recover_ratio))) {
+    fail("health: need 0 < lost_ratio <= recover_ratio (finite)");
+  }
+  if (!(score_alpha > 0.0 && score_alpha <= 1.0)) fail("score_alpha must be in (0, 1]");
+  if (!positive(voxel_size_m)) fail("voxel_size_m must be positive");
+  if (!positive(splat_lambda)) fail("splat_lambda must be positive");
+  if (!positive(focal_px)) fail("focal_px must be positive");
+  if (!(min_range_m >= 0.0) || !positive(max_range_m) || !(min_range_m < max_range_m)) {
+    fail("need 0 <= min_range_m < max_range_m (finite)");
+  }
+  VoxelMapConfig map;
+  map.voxel_size_m = voxel_size_m;
+  map.max_memory_bytes = max_map_bytes;
+  try {
+    map.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("map: ") + e.what());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ParticleSet3D
+
+void ParticleSet3D::reset(int n, const Pose3& start, std::uint64_t seed) {
+  if (n < 1) throw std::invalid_argument("ParticleSet3D: need at least one particle");
+  const auto count = static_cast<std::size_t>(n);
+  const Eigen::Quaterniond q = start.orientation.normalized();
+  x_.assign(count, static_cast<float>(start.position.x()));
+  y_.assign(count, static_cast<float>(start.position.y()));
+  z_.assign(count, static_cast<float>(start.position.z()));
+  qw_.assign(count, static_cast<float>(q.w()));
+  qx_.assign(count, static_cast<float>(q.x()));
+  qy_.assign(count, static_cast<float>(q.y()));
+  qz_.assign(count, static_cast<float>(q.z()));
+  scores_.assign(count, 1.0);  // alg. 9: s_i = 1
+  rng_ = FastNormalGenerator(seed);
+  scratch_.resize(count * 20);  // see step()
+  scratch_w_.resize(count);
+}
+
+Pose3 ParticleSet3D::particle(int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  Pose3 p;
+  p.position = Eigen::Vector3d(x_[k], y_[k], z_[k]);
+  p.orientation = Eigen::Quaterniond(qw_[k], qx_[k], qy_[k], qz_[k]).normalized();
+  return p;
+}
+
+double ParticleSet3D::normalisedWeight(int i) const {
+  double total = 0.0;
+  for (double s : scores_.stored()) total += s;
+  if (!(total > 0.0) || !std::isfinite(total)) return 1.0 / size();
+  return scores_.stored()[static_cast<std::size_t>(i)] / total;
+}
+
+Pose3 ParticleSet3D::weightedMean() const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double s : w) total += s;
+  const bool uniform = !(total > 0.0) || !std::isfinite(total);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector4d q = Eigen::Vector4d::Zero();
+  const Eigen::Vector4d ref(qw_[0], qx_[0], qy_[0], qz_[0]);
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = uniform ? 1.0 : w[i];
+    p += wi * Eigen::Vector3d(x_[i], y_[i], z_[i]);
+    Eigen::Vector4d qi(qw_[i], qx_[i], qy_[i], qz_[i]);
+    if (qi.dot(ref) < 0.0) qi = -qi;
+    q += wi * qi;
+  }
+  const double sum = uniform ? static_cast<double>(x_.size()) : total;
+  Pose3 mean;
+  mean.position = p / sum;
+  if (q.norm() > 1e-12) {
+    q.normalize();
+    mean.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+  } else {
+    mean.orientation = Eigen::Quaterniond(ref[0], ref[1], ref[2], ref[3]).normalized();
+  }
+  return mean;
+}
+
+Eigen::Matrix<double, 6, 6> ParticleSet3D::covariance(const Pose3& mean) const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double s : w) total += s;
+  const bool uniform = !(total > 0.0) || !std::isfinite(total);
+  const Eigen::Quaterniond inv_mean = mean.orientation.conjugate();
+  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = (uniform ? 1.0 : w[i]) / (uniform ? static_cast<double>(x_.size()) : total);
+    Eigen::Quaterniond d = inv_mean * Eigen::Quaterniond(qw_[i], qx_[i], qy_[i], qz_[i]);
+    if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+    Eigen::Matrix<double, 6, 1> v;
+    v << x_[i] - mean.position.x(), y_[i] - mean.position.y(), z_[i] - mean.position.z(),
+        2.0 * d.x(), 2.0 * d.y(), 2.0 * d.z();
+    c += wi * v * v.transpose();
+  }
+  return c;
+}
+
+double ParticleSet3D::essShare() const {
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0, squares = 0.0;
+  for (double s : w) {
+    total += s;
+    squares += s * s;
+  }
+  if (!(total > 0.0) || !std::isfinite(total) || !(squares > 0.0)) return 1.0;
+  return total * total / squares / static_cast<double>(w.size());
+}
+
+float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
+                          float sigma_position, float sigma_rotation, const BatchDecay& decay) {
+  const std::size_t n = x_.size();
+  // Scratch, structure of arrays of n floats each: 7 normals, 9 rotation entries, 3 voxel
+  // coordinates (as int32), the score sums.
+  float* g[7];
+  for (int k = 0; k < 7; ++k) g[k] = scratch_.data() + k * n;
+  float* rot[9];
+  for (int k = 0; k < 9; ++k) rot[k] = scratch_.data() + (7 + k) * n;
+  auto* ix = reinterpret_cast<std::int32_t*>(scratch_.data() + 16 * n);
+  std::int32_t* iy = ix + n;
+  std::int32_t* iz = iy + n;
+  float* sums = scratch_.data() + 19 * n;
+  for (std::size_t i = 0; i < n; ++i) {
+    float v[8];
+    rng_.normals4(v);
+    rng_.normals4(v + 4);
+    for (int k = 0; k < 7; ++k) g[k][i] = v[k];
+  }
+  float* qw = qw_.data();
+  float* qxs = qx_.data();
+  float* qys = qy_.data();
+  float* qzs = qz_.data();
+  float* xs = x_.data();
+  float* ys = y_.data();
+  float* zs = z_.data();
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    xs[i] += sigma_position * g[0][i];  // eq. 8.11
+    ys[i] += sigma_position * g[1][i];
+    zs[i] += sigma_position * g[2][i];
+    // Uniform axis (eq. 8.13), normal angle, small-angle quaternion (eq. 8.15), applied in the
+    // sensor frame (q <- q dq) and renormalised. The normal table holds no zero, so the axis
+    // draw never vanishes; the floor only guards the division.
+    const float axis_norm2 = g[3][i] * g[3][i] + g[4][i] * g[4][i] + g[5][i] * g[5][i];
+    const float theta = sigma_rotation * g[6][i];
+    const float s = 0.5f * theta / std::sqrt(std::max(axis_norm2, 1e-12f));
+    const float dw = 1.0f - 0.25f * theta * theta;
+    const float dx = s * g[3][i], dy = s * g[4][i], dz = s * g[5][i];
+    const float w = qw[i], qx = qxs[i], qy = qys[i], qz = qzs[i];
+    const float nw = w * dw - qx * dx - qy * dy - qz * dz;
+    const float nx = w * dx + qx * dw + qy * dz - qz * dy;
+    const float ny = w * dy - qx * dz + qy * dw + qz * dx;
+    const float nz = w * dz + qx * dy - qy * dx + qz * dw;
+    const float inv = 1.0f / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
+    const float a = nw * inv, b = nx * inv, c = ny * inv, d = nz * inv;
+    qw[i] = a;
+    qxs[i] = b;
+    qys[i] = c;
+    qzs[i] = d;
+    rot[0][i] = 1.0f - 2.0f * (c * c + d * d);
+    rot[1][i] = 2.0f * (b * c - d * a);
+    rot[2][i] = 2.0f * (b * d + c * a);
+    rot[3][i] = 2.0f * (b * c + d * a);
+    rot[4][i] = 1.0f - 2.0f * (b * b + d * d);
+    rot[5][i] = 2.0f * (c * d - b * a);
+    rot[6][i] = 2.0f * (b * d - c * a);
+    rot[7][i] = 2.0f * (c * d + b * a);
+    rot[8][i] = 1.0f - 2.0f * (b * b + c * c);
+  }
+  // Event-major order: the particles' views of one event lie close together, so the map finds
+  // their chunk once (ChunkedVoxelMap::accumulateVoxels).
+  std::fill(sums, sums + n, 0.0f);
+  const float inv_voxel = static_cast<float>(1.0 / map.voxelSize());
+  constexpr float kLimit = static_cast<float>(ChunkedVoxelMap::kMaxVoxelCoordinate);
+  for (int j = 0; j < batch; ++j) {
+    const float ex = points[j].x() * inv_voxel, ey = points[j].y() * inv_voxel,
+                ez = points[j].z() * inv_voxel;
+    float max_abs = 0.0f;
+#pragma omp simd reduction(max : max_abs)
+    for (std::size_t i = 0; i < n; ++i) {
+      // Map point in voxel units, clamped so that the conversion to int is defined; the clamp
+      // is detected through max_abs.
+      float fx = rot[0][i] * ex + rot[1][i] * ey + rot[2][i] * ez + xs[i] * inv_voxel;
+      float fy = rot[3][i] * ex + rot[4][i] * ey + rot[5][i] * ez + ys[i] * inv_voxel;
+      float fz = rot[6][i] * ex + rot[7][i] * ey + rot[8][i] * ez + zs[i] * inv_voxel;
+      max_abs = std::max(max_abs, std::max(std::abs(fx), std::max(std::abs(fy), std::abs(fz))));
+      fx = std::min(kLimit, std::max(-kLimit, fx));
+      fy = std::min(kLimit, std::max(-kLimit, fy));
+      fz = std::min(kLimit, std::max(-kLimit, fz));
+      const auto tx = static_cast<std::int32_t>(fx);
+      const auto ty = static_cast<std::int32_t>(fy);
+      const auto tz = static_cast<std::int32_t>(fz);
+      ix[i] = tx - (static_cast<float>(tx) > fx ? 1 : 0);  // floor
+      iy[i] = ty - (static_cast<float>(ty) > fy ? 1 : 0);
+      iz[i] = tz - (static_cast<float>(tz) > fz ? 1 : 0);
+    }
+    if (max_abs < kLimit) {
+      map.accumulateVoxels(ix, iy, iz, static_cast<int>(n), sums);
+    }  // else: a particle far outside the map's range; its view of this event scores nothing
+  }
+  const double factor = scores_.beginUpdate(decay);
+  std::vector<double>& stored = scores_.stored();
+  float best = 0.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    stored[i] += factor * static_cast<double>(sums[i]);
+    best = std::max(best, sums[i]);
+  }
+  return best;
+}
+
+bool ParticleSet3D::resampleSystematic() {
+  std::vector<double>& w = scores_.stored();
+  const std::size_t n = w.size();
+  double total = 0.0;
+  for (double s : w) total += s;
+  if (!(total > 0.0) || !std::isfinite(total)) return false;
+  std::vector<float>* arrays[] = {&x_, &y_, &z_, &qw_, &qx_, &qy_, &qz_};
+  std::vector<float> old(7 * n);
+  for (std::size_t a = 0; a < 7; ++a) std::copy(arrays[a]->begin(), arrays[a]->end(), &old[a * n]);
+  const std::vector<double> old_w = w;
+  const double step = total / static_cast<double>(n);
+  double u = rng_.uniform() * step;
+  double cumulative = old_w[0];
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    while (u > cumulative && k + 1 < n) cumulative += old_w[++k];
+    for (std::size_t a = 0; a < 7; ++a) (*arrays[a])[j] = old[a * n + k];
+    w[j] = old_w[k];
+    u += step;
+  }
+  // Keep the quaternions on one hemisphere of the first, so that means need no per-call flip.
+  for (std::size_t j = 0; j < n; ++j) {
+    if (qw_[j] * qw_[0] + qx_[j] * qx_[0] + qy_[j] * qy_[0] + qz_[j] * qz_[0] < 0.0f) {
+      qw_[j] = -qw_[j];
+      qx_[j] = -qx_[j];
+      qy_[j] = -qy_[j];
+      qz_[j] = -qz_[j];
+    }
+  }
+  scores_.renormalise();
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// EventSlam3d
+
+namespace {
+
+VoxelMapConfig mapConfig(const Ebslam3dConfig& c) {
+  c.validate();
+  VoxelMapConfig m;
+  m.voxel_size_m = c.voxel_size_m;
+  m.max_memory_bytes = c.max_map_bytes;
+  return m;
+}
+
+}  // namespace
+
+EventSlam3d::EventSlam3d(const Ebslam3dConfig& config, const Pose3& start)
+    : config_(config), map_(mapConfig(config)) {
+  for (int b = 1; b <= config_.batch_size; ++b) {
+    batch_decay_.push_back(batchDecay(config_.score_alpha, b));
+  }
+  reset(start);
+}
+
+void EventSlam3d::reset(const Pose3& start) {
+  map_.clear();
+  particles_.reset(config_.num_particles, start, config_.seed);
+  expected_ = start;
+  expected_.orientation.normalize();
+  in_batch_ = 0;
+  share_accumulator_ = 0.0;
+  since_resample_ = 0;
+  have_prev_batch_ = false;
+  motion_ref_set_ = false;
+  angular_speed_ = config_.reference_angular_speed;
+  linear_speed_ = config_.reference_linear_speed;
+  rate_window_open_ = false;
+  rate_window_count_ = 0;
+  rate_share_ = 1.0;
+  health_ = TrackingHealth{};
+  health_started_ = false;
+  above_recover_s_ = 0.0;
+  last_t_us_ = std::numeric_limits<std::int64_t>::min();
+}
+
+void EventSlam3d::setConfig(const Ebslam3dConfig& config) {
+  config.validate();
+  if (config.voxel_size_m != config_.voxel_size_m ||
+      config.max_map_bytes != config_.max_map_bytes) {
+    throw std::invalid_argument(
+        "EventSlam3d::setConfig: voxel_size_m and max_map_bytes are fixed for a map");
+  }
+  const bool count_changed = config.num_particles != config_.num_particles;
+  std::vector<BatchDecay> decay;
+  for (int b = 1; b <= config.batch_size; ++b) decay.push_back(batchDecay(config.score_alpha, b));
+  config_ = config;
+  batch_decay_ = std::move(decay);
+  // process() leaves no partial batch behind, so in_batch_ is 0 here.
+  since_resample_ = std::min(since_resample_, config_.resample_every - 1);
+  if (count_changed) particles_.reset(config_.num_particles, expected_, config_.seed);
+}
+
+EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::size_t count) {
+  ProcessStats stats;
+  if (count == 0) return stats;
+  std::int64_t t = last_t_us_;
+  for (std::size_t i = 0; i < count; ++i) {
+    if (events[i].t_us < t) {
+      throw std::invalid_argument("EventSlam3d::process: event " + std::to_string(i) +
+                                  " has time " + std::to_string(events[i].t_us) +
+                                  " us, earlier than its predecessor (" + std::to_string(t) +
+                                  " us)");
+    }
+    t = events[i].t_us;
+  }
+  last_t_us_ = t;
+  const float min_r2 = static_cast<float>(config_.min_range_m * config_.min_range_m);
+  const float max_r2 = static_cast<float>(config_.max_range_m * config_.max_range_m);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3f& p = events[i].point;
+    const float r2 = p.squaredNorm();  // NaN for a non-finite point, which fails both tests
+    if (!(r2 >= min_r2 && r2 <= max_r2)) {
+      ++stats.rejected;
+      continue;
+    }
+    if (config_.max_event_rate > 0.0) {
+      // The share for this window comes from the previous window's rate, so that the events
+      // kept are spread evenly over it (a token bucket would keep each burst's first events).
+      const std::int64_t t_us = events[i].t_us;
+      if (!rate_window_open_) {
+        rate_window_open_ = true;
+        rate_window_start_us_ = t_us;
+        rate_window_count_ = 0;
+      } else if (static_cast<double>(t_us - rate_window_start_us_) >= 1e6 * config_.rate_window_s) {
+        const double span_s = 1e-6 * static_cast<double>(t_us - rate_window_start_us_);
+        const double rate = static_cast<double>(rate_window_count_) / span_s;
+        rate_share_ = rate > config_.max_event_rate ? config_.max_event_rate / rate : 1.0;
+        rate_window_start_us_ = t_us;
+        rate_window_count_ = 0;
+      }
+      ++rate_window_count_;
+    } else {
+      rate_share_ = 1.0;
+    }
+    share_accumulator_ += config_.event_share * rate_share_;
+    if (share_accumulator_ < 1.0) {
+      ++stats.skipped;
+      continue;
+    }
+    share_accumulator_ -= 1.0;
+    batch_end_us_ = events[i].t_us;
+    batch_[in_batch_++] = p;
+    ++stats.used;
+    if (in_batch_ == config_.batch_size) runBatch(in_batch_);
+  }
+  if (in_batch_ > 0) runBatch(in_batch_);
+  rejected_ += stats.rejected;
+  return stats;
+}
+
+void EventSlam3d::runBatch(int b) {
+  in_batch_ = 0;
+  // Diffusion: B events' worth (per-event part) plus the event time the batch spans (per-time
+  // part), as variances.
+  double dt_s = 0.0;
+  if (have_prev_batch_) {
+    dt_s = std::min(config_.max_diffusion_dt_s,
+                    1e-6 * static_cast<double>(batch_end_us_ - prev_batch_end_us_));
+  }
+  prev_batch_end_us_ = batch_end_us_;
+  have_prev_batch_ = true;
+  const double scale_p = diffusionScale(linear_speed_, config_.reference_linear_speed);
+  const double scale_r = diffusionScale(angular_speed_, config_.reference_angular_speed);
+  const double sp = scale_p * config_.sigma_position_per_sqrt_s;
+  const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
+  const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
+  const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
+  const float best = particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
+                                     static_cast<float>(std::sqrt(var_r)), batch_decay_[b - 1]);
+  updateHealth(best, b, dt_s);
+  processed_ += static_cast<std::uint64_t>(b);
+  since_resample_ += b;
+  expected_ = particles_.weightedMean();
+  updateMotion();
+  // Mapping (eq. 8.9).
+  if (config_.splat == MapSplat3d::kExpectedPose) {
+    const Eigen::Quaternionf q = expected_.orientation.cast<float>();
+    const Eigen::Vector3f t = expected_.position.cast<float>();
+    for (int j = 0; j < b; ++j) splat(batch_[j], q, t, 1.0f);
+  } else {
+    for (int i = 0; i < particles_.size(); ++i) {
+      const auto w = static_cast<float>(particles_.normalisedWeight(i));
+      if (!(w > 0.0f)) continue;
+      const Pose3 p = particles_.particle(i);
+      const Eigen::Quaternionf q = p.orientation.cast<float>();
+      const Eigen::Vector3f t = p.position.cast<float>();
+      for (int j = 0; j < b; ++j) splat(batch_[j], q, t, w);
+    }
+  }
+  if (since_resample_ >= config_.resample_every) {
+    particles_.resampleSystematic();
+    since_resample_ -= config_.resample_every;
+  }
+}
+
+double EventSlam3d::diffusionScale(double speed, double reference) const {
+  return std::min(config_.diffusion_max_scale,
+                  std::max(config_.diffusion_min_scale, speed / reference));
+}
+
+void EventSlam3d::updateMotion() {
+  // Speeds from the estimate's change over whole windows (not per batch: over a batch of a few
+  // events the change is dominated by the weighted mean's jitter).
+  if (!motion_ref_set_) {
+    motion_ref_set_ = true;
+    motion_ref_pose_ = expected_;
+    motion_ref_us_ = batch_end_us_;
+    return;
+  }
+  const double span_s = 1e-6 * static_cast<double>(batch_end_us_ - motion_ref_us_);
+  if (span_s < config_.motion_window_s) return;
+  const double angle = expected_.orientation.angularDistance(motion_ref_pose_.orientation);
+  const double distance = (expected_.position - motion_ref_pose_.position).norm();
+  // A gap longer than a few windows (no events) says nothing about the speed within it.
+  const double used_s = std::max(span_s, config_.motion_window_s);
+  const double gain =
+      1.0 - std::exp(-std::min(span_s, 4.0 * config_.motion_window_s) / config_.motion_time_s);
+  angular_speed_ += gain * (angle / used_s - angular_speed_);
+  linear_speed_ += gain * (distance / used_s - linear_speed_);
+  motion_ref_pose_ = expected_;
+  motion_ref_us_ = batch_end_us_;
+}
+
+void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
+  const TrackingHealthConfig& c = config_.health;
+  TrackingHealth& h = health_;
+  h.ess_share = particles_.essShare();
+  const double fit = static_cast<double>(best_sum) / b;
+  if (!health_started_) {
+    health_started_ = true;
+    h.fit_fast = fit;
+    h.fit_slow = fit;
+    health_start_us_ = batch_end_us_;
+  } else {
+    h.fit_fast += (1.0 - std::exp(-dt_s / c.fast_time_s)) * (fit - h.fit_fast);
+    // Frozen unless tracking: the reference is how well the events fitted while on track.
+    if (h.state == TrackingState::kTracking) {
+      h.fit_slow += (1.0 - std::exp(-dt_s / c.slow_time_s)) * (h.fit_fast - h.fit_slow);
+    }
+  }
+  h.fit_ratio = h.fit_slow > 0.0 ? h.fit_fast / h.fit_slow : 1.0;
+  if (h.state == TrackingState::kLost) h.time_lost_s += dt_s;
+  if (1e-6 * static_cast<double>(batch_end_us_ - health_start_us_) < c.warmup_s) return;
+  switch (h.state) {
+    case TrackingState::kTracking:
+      if (h.fit_ratio < c.lost_ratio) {
+        h.state = TrackingState::kLost;
+        ++h.lost_count;
+      }
+      break;
+    case TrackingState::kLost:
+      if (h.fit_ratio >= c.recover_ratio) {
+        h.state = TrackingState::kRecovering;
+        above_recover_s_ = 0.0;
+      }
+      break;
+    case TrackingState::kRecovering:
+      if (h.fit_ratio < c.lost_ratio) {
+        h.state = TrackingState::kLost;
+        ++h.lost_count;
+      } else if (h.fit_ratio >= c.recover_ratio) {
+        above_recover_s_ += dt_s;
+        if (above_recover_s_ >= c.recover_hold_s) h.state = TrackingState::kTracking;
+      } else {
+        above_recover_s_ = 0.0;
+      }
+      break;
+  }
+}
+
+void EventSlam3d::splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q,
+                        const Eigen::Vector3f& t, float weight) {
+  // eq. 8.10: sigma = D / (2 lambda f), D the event's distance to the camera.
+  const float sigma =
+      point.norm() / static_cast<float>(2.0 * config_.splat_lambda * config_.focal_px);
+  map_.addGaussian(q * point + t, sigma, weight);
+}
+
+std::size_t EventSlam3d::memoryBytes() const {
+  return map_.memoryBytes() + static_cast<std::size_t>(config_.num_particles) *
+                                  (19 * sizeof(float) + 2 * sizeof(double));
+}
+
+std::size_t EventSlam3d::peakMemoryBytes() const {
+  return map_.peakMemoryBytes() + static_cast<std::size_t>(config_.num_particles) *
+                                      (19 * sizeof(float) + 2 * sizeof(double));
+}
+
+}  // namespace ebslam

@@ -1,0 +1,17 @@
+#include "ebslam/slam/tracking_state.h"
+
+namespace ebslam {
+
+const char* toString(TrackingState state) {
+  switch (state) {
+    case TrackingState::kTracking:
+      return "tracking";
+    case TrackingState::kLost:
+      return "lost";
+    case TrackingState::kRecovering:
+      return "recovering";
+  }
+  return "unknown";
+}
+
+}  // namespace ebslam
