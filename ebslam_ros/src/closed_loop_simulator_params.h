@@ -11,7 +11,7 @@ namespace ebslam_ros {
 
 /// The closed-loop floor-robot simulator (ClosedLoopSimulator nodelet, thesis 7.4).
 struct ClosedLoopSimulatorNodeConfig {
-  std::string floor_plan;  ///< ~floor_plan: floor-plan file (ebslam/floor_plan.h)
+  std::string floor_plan;  ///< ~floor_plan: floor-plan file (ebslam/simulation/floor_plan.h)
   /// The eDVS (~camera/*, ~ceiling_distance as the filters'), ~seed (event model and ceiling),
   /// ~noise_rate [Hz per pixel], robot limits ~robot_radius [m], ~max_speed [m/s],
   /// ~max_turn_rate [rad/s], ~bump_segments.

@@ -18,7 +18,8 @@ DepthEventFusionNodeConfig loadDepthEventFusionNodeConfig(const ros::NodeHandle&
   DepthEventFusionNodeConfig c;
   c.calibration = param<std::string>(nh, "calibration", c.calibration);
   if (c.calibration.empty()) {
-    fail(nh, "calibration", "is not set (a D-eDVS sensors yaml, format in ebslam/dedvs_io.h)");
+    fail(nh, "calibration",
+         "is not set (a D-eDVS sensors yaml, format in ebslam/slam/dedvs_sensors.h)");
   }
   try {
     c.sensors = ebslam::readDedvsSensors(c.calibration);

@@ -11,8 +11,9 @@ namespace ebslam_ros {
 
 /// Configuration of the DepthEventFusion nodelet (D-eDVS depth for every event, thesis 8.2).
 struct DepthEventFusionNodeConfig {
-  /// ~calibration (required): sensors yaml (ebslam/dedvs_io.h readDedvsSensors format: eDVS
-  /// intrinsics and distortion, depth intrinsics, depth_from_edvs, depth clock offset, frame rate)
+  /// ~calibration (required): sensors yaml (ebslam/slam/dedvs_sensors.h readDedvsSensors format:
+  /// eDVS intrinsics and distortion, depth intrinsics, depth_from_edvs, depth clock offset, frame
+  /// rate)
   std::string calibration;
   ebslam::DedvsSensors sensors;      ///< read from ~calibration
   ebslam::DepthFusionConfig fusion;  ///< ~min_depth, ~max_depth [m], ~max_frame_age [s],

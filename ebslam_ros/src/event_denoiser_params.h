@@ -7,7 +7,7 @@
 
 namespace ebslam_ros {
 
-/// Background-activity filter (ebslam/event_denoiser.h) from `nh`: ~window [s] 0.1,
+/// Background-activity filter (ebslam/events/event_denoiser.h) from `nh`: ~window [s] 0.1,
 /// ~min_support 3, ~polarity_match true, ~refractory_filter false, ~refractory_period [s] 0.001
 /// (the core defaults). Times are rounded to microseconds.
 ebslam::BackgroundActivityFilterConfig loadBackgroundActivityFilterConfig(

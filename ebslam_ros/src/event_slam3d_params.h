@@ -13,7 +13,7 @@
 
 namespace ebslam_ros {
 
-/// EB-SLAM-3D core (ebslam/ebslam3d.h) over `defaults`: ~num_particles, ~batch_size,
+/// EB-SLAM-3D core (ebslam/slam/ebslam3d.h) over `defaults`: ~num_particles, ~batch_size,
 /// ~resample_every, ~event_share, ~sigma_position [m], ~sigma_rotation [rad], ~score_alpha,
 /// ~voxel_size [m], ~splat_lambda, ~focal_px [px], ~min_range [m], ~max_range [m],
 /// ~max_map_mb [MiB, 0 = unbounded], ~splat (expected_pose|all_particles), ~seed.

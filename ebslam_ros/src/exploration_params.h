@@ -3,8 +3,8 @@
 
 #include <ros/node_handle.h>
 
-#include <ebslam/slam/exploration.h>
 #include <ebslam/events/pose.h>
+#include <ebslam/slam/exploration.h>
 
 #include <optional>
 #include <string>

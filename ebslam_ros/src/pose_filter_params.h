@@ -5,8 +5,8 @@
 #include <ros/node_handle.h>
 
 #include <ebslam/events/event_denoiser.h>
-#include <ebslam/slam/event_filter.h>
 #include <ebslam/events/pose.h>
+#include <ebslam/slam/event_filter.h>
 
 #include "ceiling_sensor_params.h"
 #include "pose_node_params.h"

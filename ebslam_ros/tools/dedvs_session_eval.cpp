@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   app.add_option("--session", session_bag, "the session bag (events, depth, ground truth)")
       ->required()
       ->check(CLI::ExistingFile);
-  app.add_option("--calibration", calibration, "D-eDVS sensors.yaml (ebslam/simulation/dedvs_io.h)")
+  app.add_option("--calibration", calibration, "D-eDVS sensors.yaml (ebslam/slam/dedvs_sensors.h)")
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--poses", poses_bag, "bag of the published poses")->check(CLI::ExistingFile);

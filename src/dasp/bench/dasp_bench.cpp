@@ -171,9 +171,10 @@ void BM_OpenCvSlic(benchmark::State& state) {
 }
 BENCHMARK(BM_OpenCvSlic)->ArgName("threads")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
-// The DASP / SLIC time ratio measured robustly: DASP and OpenCV SLIC (single-threaded) alternate frame by
-// frame and each is timed in CPU time of this thread, so that other jobs on a shared machine
-// (which inflate wall times and come and go between two separate benchmarks) hit both alike.
+// The DASP / SLIC time ratio measured robustly: DASP and OpenCV SLIC (single-threaded) alternate
+// frame by frame and each is timed in CPU time of this thread, so that other jobs on a shared
+// machine (which inflate wall times and come and go between two separate benchmarks) hit both
+// alike.
 
 void BM_DaspVsOpenCvSlic(benchmark::State& state) {
   const int previous = cv::getNumThreads();
