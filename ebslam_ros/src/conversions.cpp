@@ -85,20 +85,6 @@ Eigen::Isometry3d toIsometry(const geometry_msgs::Transform& transform) {
   return t;
 }
 
-Eigen::Isometry3d toIsometry(const ebslam::Pose3& pose) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = pose.orientation.normalized().toRotationMatrix();
-  t.translation() = pose.position;
-  return t;
-}
-
-ebslam::Pose3 toPose3(const Eigen::Isometry3d& transform) {
-  ebslam::Pose3 pose;
-  pose.position = transform.translation();
-  pose.orientation = Eigen::Quaterniond(transform.rotation()).normalized();
-  return pose;
-}
-
 Eigen::Isometry3d fromXyzRpy(const std::array<double, 3>& xyz, const std::array<double, 3>& rpy) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.linear() = (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *

@@ -208,7 +208,8 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
       clearPath();
     }
     if (!slam_) {
-      slam_ = std::make_unique<ebslam::EventSlam3d>(config_.slam, toPose3(initial_base_ * *mount_));
+      slam_ = std::make_unique<ebslam::EventSlam3d>(
+          config_.slam, ebslam::Pose3::fromIsometry(initial_base_ * *mount_));
     }
     const auto chunk = static_cast<std::size_t>(config_.max_events_per_update);
     for (std::size_t i = 0; i < segment.events.size(); i += chunk) {
@@ -239,7 +240,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     const ros::Time stamp = ebslam_msgs::toRosTime(t_us);
     last_stamp_us_ = t_us;
     const Eigen::Isometry3d mount_inverse = mount_->inverse();
-    const Eigen::Isometry3d base = toIsometry(slam_->estimate()) * mount_inverse;
+    const Eigen::Isometry3d base = slam_->estimate().isometry() * mount_inverse;
 
     // Covariance of base_link's pose over the score-weighted particles: position [m^2] and
     // rotation as the rotation vector of particle * estimate^-1 about the map's fixed axes
@@ -248,7 +249,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();
     std::vector<Eigen::Isometry3d> bases(static_cast<std::size_t>(particles.size()));
     for (int i = 0; i < particles.size(); ++i) {
-      const Eigen::Isometry3d b = toIsometry(particles.particle(i)) * mount_inverse;
+      const Eigen::Isometry3d b = particles.particle(i).isometry() * mount_inverse;
       bases[static_cast<std::size_t>(i)] = b;
       const double w = particles.size() == 1 ? 1.0 : particles.normalisedWeight(i);
       const Eigen::AngleAxisd r(b.rotation() * base.rotation().transpose());

@@ -1,6 +1,7 @@
 #pragma once
 // Core types <-> ROS messages of ebslam_ros: poses and transforms of the pose nodelets (planar
-// ebslam::Pose2 with tf2::Transform, 6-DoF ebslam::Pose3 with Eigen::Isometry3d), and the image
+// ebslam::Pose2 with tf2::Transform, 6-DoF poses as Eigen::Isometry3d: ebslam::Pose3::isometry()
+// and Pose3::fromIsometry convert the core's), and the image
 // and camera messages of the simulators and bag writers (RgbdEventSimulator, make_session, the
 // simulated calibration bag). Event messages are converted by ebslam_msgs/event_conversions.h.
 // Lengths in metres, angles in radians; rotations are fixed-axis roll, pitch, yaw as tf2's
@@ -42,9 +43,6 @@ geometry_msgs::TransformStamped toTransformMsg(const Eigen::Isometry3d& transfor
 
 /// A transform message as an isometry (quaternion normalised).
 Eigen::Isometry3d toIsometry(const geometry_msgs::Transform& transform);
-/// A 6-DoF core pose as an isometry (quaternion normalised) and back.
-Eigen::Isometry3d toIsometry(const ebslam::Pose3& pose);
-ebslam::Pose3 toPose3(const Eigen::Isometry3d& transform);
 /// Translation `xyz` and fixed-axis roll, pitch, yaw.
 Eigen::Isometry3d fromXyzRpy(const std::array<double, 3>& xyz, const std::array<double, 3>& rpy);
 /// base_link -> sensor of a pose nodelet's parameter file (e.g. config/ebslam3d.yaml): its
