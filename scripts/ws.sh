@@ -127,6 +127,11 @@ run_tests() {
   echo "=== install space"
   /usr/bin/python3 "${repo}/scripts/tests/install_space_test.py" "${ws}" "${results}/install_space.xml" \
     </dev/null 2>&1 | tail -n 20 || status=1
+  # The layering of the built libraries: the eDVS core, messages, driver and DASP nodes link no
+  # SLAM, simulation or calibration code and no Ceres.
+  echo "=== link layering"
+  /usr/bin/python3 "${repo}/scripts/tests/link_layering_test.py" "${ws}" "${results}/link_layering.xml" \
+    </dev/null 2>&1 | tail -n 3 || status=1
   # catkin_test_results checks catkin's own XML (and finds missing results); our counter reads
   # every file once (no double counting). Its failures are shown and counted, never discarded.
   local catkin_results

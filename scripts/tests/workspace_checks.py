@@ -103,8 +103,8 @@ class LaunchDocTest(unittest.TestCase):
         self.assertEqual(bad, [], "\n".join(bad))
 
 
-def write_junit(result, tests, path):
-    suite = ET.Element("testsuite", name="workspace_checks", tests=str(len(tests)))
+def write_junit(result, tests, path, name="workspace_checks"):
+    suite = ET.Element("testsuite", name=name, tests=str(len(tests)))
     failed = {t.id(): m for t, m in result.failures + result.errors}
     for test in tests:
         case = ET.SubElement(suite, "testcase", classname=type(test).__name__,
