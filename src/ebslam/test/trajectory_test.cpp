@@ -45,6 +45,20 @@ TEST(Trajectory, TumRoundTrip) {
   fs::remove(path);
 }
 
+TEST(Pose3, IsometryRoundTripNormalisesTheQuaternion) {
+  Pose3 pose;
+  pose.position = Eigen::Vector3d(0.5, -1.25, 2.0);
+  pose.orientation = Eigen::Quaterniond(2.0, 0.2, -0.4, 0.6);  // not unit: isometry() normalises
+  const Eigen::Isometry3d t = pose.isometry();
+  EXPECT_NEAR((t.linear() * t.linear().transpose() - Eigen::Matrix3d::Identity()).norm(), 0.0,
+              1e-12);
+  EXPECT_NEAR((t * Eigen::Vector3d::Zero() - pose.position).norm(), 0.0, 1e-12);
+  const Pose3 back = Pose3::fromIsometry(t);
+  EXPECT_NEAR((back.position - pose.position).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(back.orientation.angularDistance(pose.orientation.normalized()), 0.0, 1e-9);
+  EXPECT_NEAR(back.orientation.norm(), 1.0, 1e-12);
+}
+
 TEST(Trajectory, MalformedLinesNameFileAndLine) {
   const std::string path = tempPath("bad.txt");
   const std::string good = "# comment\n1.0 0 0 0 0 0 0 1\n";
