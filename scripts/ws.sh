@@ -82,6 +82,11 @@ run_tests() {
   echo "=== workspace checks"
   /usr/bin/python3 "${repo}/scripts/tests/workspace_checks.py" "${results}/workspace_checks.xml" \
     </dev/null 2>&1 | tail -n 3 || status=1
+  # Names written in the docs, launch-argument docs and yaml comments exist (headers, messages,
+  # services, nodelets), and the package tables list every message and service.
+  echo "=== docs references"
+  /usr/bin/python3 "${repo}/scripts/tests/docs_references_test.py" "${results}/docs_references.xml" \
+    </dev/null 2>&1 | tail -n 3 || status=1
   local entry name path
   for entry in "${packages[@]}"; do
     read -r name path <<<"${entry}"
