@@ -2,9 +2,9 @@
 """Names written in the documentation exist:
 
   - every header path (`ebslam/slam/dedvs_sensors.h`, `ebslam_ros/src/event_input.h`,
-    `pose_filter_nodelet_base.h`) and every message or service name (`ebslam_msgs/ResetPose`,
-    `Bump.msg`, `sensor_msgs/Image`) and nodelet type (`ebslam_ros/EventSlam3d`) written in the Markdown files, in the `doc` of launch-file
-    arguments and in the comments of yaml files;
+    `pose_filter_nodelet_base.h`), message or service name (`ebslam_msgs/ResetPose`, `Bump.msg`,
+    `sensor_msgs/Image`) and nodelet type (`ebslam_ros/EventSlam3d`) written in the Markdown
+    files, in the `doc` of launch-file arguments and in the comments of yaml files;
   - every message and service of a workspace package is named in the package tables (the rows
     for that package in README.md and docs/building.md).
 
@@ -215,11 +215,12 @@ class DocsReferencesTest(unittest.TestCase):
             return reference_problems(tree, documentation_texts(tmp, list(files)))
 
     def test_a_header_at_a_wrong_place_fails(self):
-        problems = self.problems_of({"docs/wrong.md": "Format: `ebslam/simulation/dedvs_sensors.h`.\n"})
+        wrong = "Format: `ebslam/simulation/dedvs_sensors.h`.\n"
+        problems = self.problems_of({"docs/wrong.md": wrong})
         self.assertEqual(len(problems), 1, problems)
         self.assertIn("ebslam/simulation/dedvs_sensors.h", problems[0])
-        self.assertEqual(self.problems_of({"docs/right.md": "Format: `ebslam/slam/dedvs_sensors.h`.\n"}),
-                         [])
+        right = "Format: `ebslam/slam/dedvs_sensors.h`.\n"
+        self.assertEqual(self.problems_of({"docs/right.md": right}), [])
 
     def test_a_wrong_name_in_a_launch_doc_and_a_yaml_comment_fails(self):
         launch = ('<launch>\n  <arg name="calibration" default="x" '
