@@ -1,6 +1,6 @@
 #include "depth_event_fusion_params.h"
 
-#include <ebslam/simulation/dedvs_io.h>
+#include <ebslam/slam/dedvs_sensors.h>
 
 #include <cmath>
 #include <exception>

@@ -12,8 +12,8 @@
 // Parameters: ~window, ~min_support, ~polarity_match, ~refractory_filter, ~refractory_period
 // (dynamic_reconfigure), ~queue_size, ~max_backward; see README.md.
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <dynamic_reconfigure/server.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <boost/thread/recursive_mutex.hpp>
@@ -48,7 +48,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
       config_ = loadEventDenoiserNodeConfig(getPrivateNodeHandle());
     });
     ros::NodeHandle& nh = getNodeHandle();
-    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventDenoiserKnobsConfig>>(
+    reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<EventDenoiserKnobsConfig>>(
         reconfigure_mutex_, getPrivateNodeHandle());
     ebslam_ros_common::markReconfigureParamsRead<EventDenoiserKnobsConfig>(getPrivateNodeHandle());
     EventDenoiserKnobsConfig start;
@@ -215,7 +215,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
   std::int64_t last_t_us_ = kNoTime;
   ros::Subscriber events_sub_;
   ros::Publisher events_pub_;
-  std::unique_ptr<dynamic_reconfigure::Server<EventDenoiserKnobsConfig>> reconfigure_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EventDenoiserKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;

@@ -11,9 +11,9 @@
 // voxels above ~map_threshold, every ~map_publish_period s of wall time while subscribed), tf,
 // /diagnostics; services reset and save_map; dynamic_reconfigure knobs (EventSlam3dKnobs.cfg).
 // Mounting, input checks, pose, path, particles, tf and diagnostics: PoseFilterNodeletBase.
-#include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
@@ -120,7 +120,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
       reset_srv_ = nh.advertiseService("reset", &EventSlam3dNodelet::onReset, this);
       save_srv_ = nh.advertiseService("save_map", &EventSlam3dNodelet::onSave, this);
 
-      reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventSlam3dKnobsConfig>>(
+      reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<EventSlam3dKnobsConfig>>(
           reconfigure_mutex_, pnh);
       ebslam_ros_common::markReconfigureParamsRead<EventSlam3dKnobsConfig>(pnh);
       EventSlam3dKnobsConfig start;
@@ -413,7 +413,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
   ros::Subscriber events_sub_;
   ros::Publisher map_pub_;
   ros::ServiceServer reset_srv_, save_srv_;
-  std::unique_ptr<dynamic_reconfigure::Server<EventSlam3dKnobsConfig>> reconfigure_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EventSlam3dKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
   ros::WallTimer map_timer_;
 

@@ -55,7 +55,7 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
   ros::NodeHandle& private_nh = getPrivateNodeHandle();
   reset_srv_ = nh.advertiseService("reset", &PlanarPoseFilterNodelet::onReset, this);
 
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EventFilterKnobsConfig>>(
+  reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<EventFilterKnobsConfig>>(
       reconfigure_mutex_, private_nh);
   ebslam_ros_common::markReconfigureParamsRead<EventFilterKnobsConfig>(private_nh);
   EventFilterKnobsConfig start;

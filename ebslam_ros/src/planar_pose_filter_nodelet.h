@@ -5,9 +5,9 @@
 // `reset` service (ebslam_msgs/ResetPose) and the filter knobs (EventFilterKnobs.cfg). The core
 // estimates the planar pose of the sensor's optical frame (z up to the ceiling).
 
-#include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/EventArray.h>
 #include <ebslam_msgs/ResetPose.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <ebslam/events/event_denoiser.h>
@@ -102,7 +102,7 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
 
   ros::Subscriber events_sub_;
   ros::ServiceServer reset_srv_;
-  std::unique_ptr<dynamic_reconfigure::Server<EventFilterKnobsConfig>> reconfigure_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EventFilterKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
 
   // Counters of this input for diagnostics (since start).

@@ -3,7 +3,9 @@
 // depth camera axes parallel, so the fused eDVS depth is the plane's distance), then bad input:
 // holes, events older than every frame, depth of a wrong encoding or size, event and depth
 // clocks that disagree, a wrong sensor size; the node must give NaN (no invented depth), say
-// why, and go on. Also: a missing ~calibration stops the nodelet with a FATAL naming it.
+// why, and go on. Also: a missing ~calibration stops the nodelet with a FATAL naming it, and a
+// second nodelet's depth events equal the core's (ebslam/slam/dedvs_fusion.h) run in this
+// process on the same frames and events.
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_msgs/EventArray.h>
 #include <gtest/gtest.h>
@@ -16,14 +18,22 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <ebslam/slam/dedvs_fusion.h>
+#include <ebslam/slam/dedvs_sensors.h>
+#include <opencv2/core.hpp>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <functional>
 #include <limits>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
+
+#include "ebslam_msgs/event_conversions.h"
 
 namespace {
 
@@ -304,6 +314,130 @@ TEST(DepthEventFusion, StopsWithAFatalReasonWithoutCalibration) {
       << fatal[0];
   EXPECT_NE(fatal[1].find("/fusion_of_missing_file/calibration"), std::string::npos) << fatal[1];
   EXPECT_NE(fatal[1].find("/nonexistent/sensors.yaml"), std::string::npos) << fatal[1];
+}
+
+// A depth scene that changes from frame to frame: a tilted wall, a box moving across it (a depth
+// step the rays must not bridge) and a hole (no depth) moving the other way; 16UC1 millimetres on
+// even frames, 32FC1 metres on odd ones.
+cv::Mat sceneDepth(int k) {
+  const bool metres = k % 2 == 1;
+  cv::Mat depth(kDepthHeight, kDepthWidth, metres ? CV_32FC1 : CV_16UC1);
+  for (int v = 0; v < kDepthHeight; ++v) {
+    for (int u = 0; u < kDepthWidth; ++u) {
+      double z = 1.3 + 0.006 * u + 0.002 * v + 0.02 * k;  // [m]
+      const bool box = u >= 30 + 4 * k && u < 80 + 4 * k && v >= 30 && v < 90;
+      const bool hole = u >= 110 - 3 * k && u < 125 - 3 * k && v >= 10 && v < 50;
+      if (box) z = 0.8 + 0.001 * v;
+      if (metres) {
+        depth.at<float>(v, u) =
+            hole ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(z);
+      } else {
+        depth.at<std::uint16_t>(v, u) =
+            hole ? 0 : static_cast<std::uint16_t>(std::lround(z * 1000.0));
+      }
+    }
+  }
+  return depth;
+}
+
+sensor_msgs::Image toImageMsg(const cv::Mat& depth, const ros::Time& stamp) {
+  sensor_msgs::Image image;
+  image.header.stamp = stamp;
+  image.header.frame_id = "camera_depth_optical_frame";
+  image.width = static_cast<std::uint32_t>(depth.cols);
+  image.height = static_cast<std::uint32_t>(depth.rows);
+  image.encoding = depth.type() == CV_32FC1 ? "32FC1" : "16UC1";
+  image.step = static_cast<std::uint32_t>(depth.cols * depth.elemSize());
+  image.data.assign(depth.datastart, depth.dataend);
+  return image;
+}
+
+// The node against its core (fusion_core in the .test file, ~max_wait long enough that every
+// EventArray waits for the frame it is meant to meet): per depth frame k at t_k, one EventArray
+// of events in (t_k - T, t_k) (nearest frame k - 1 or k) and one in [t_k, t_k + 0.45 T], random
+// pixels (a few outside the sensor), published after the frame; the core gets the same frame and
+// then the same events. Every event's depth and point equal the core's to the bit (or both NaN).
+TEST(DepthEventFusion, DepthEventsEqualTheCoreOnTheSameFramesAndEvents) {
+  ros::NodeHandle nh("core");
+  ros::Publisher events_pub = nh.advertise<ebslam_msgs::EventArray>("events", 100);
+  ros::Publisher depth_pub = nh.advertise<sensor_msgs::Image>("depth_registered/image_raw", 100);
+  std::vector<ebslam_msgs::DepthEventArray> out;
+  ros::Subscriber sub = nh.subscribe<ebslam_msgs::DepthEventArray>(
+      "depth_events", 100,
+      [&](const ebslam_msgs::DepthEventArray::ConstPtr& m) { out.push_back(*m); });
+  ASSERT_TRUE(waitFor([&] {
+    return events_pub.getNumSubscribers() > 0 && depth_pub.getNumSubscribers() > 0 &&
+           sub.getNumPublishers() > 0;
+  }));
+  ros::WallDuration(0.5).sleep();  // roscpp counts a subscriber before its side is ready
+
+  std::string calibration;
+  ASSERT_TRUE(ros::param::get("/fusion_core/calibration", calibration));
+  const ebslam::DedvsSensors sensors = ebslam::readDedvsSensors(calibration);
+  ros::NodeHandle p("/fusion_core");
+  ebslam::DepthFusionConfig config;
+  config.min_depth_m = p.param("min_depth", config.min_depth_m);
+  config.max_depth_m = p.param("max_depth", config.max_depth_m);
+  config.max_frame_age_s = p.param("max_frame_age", config.max_frame_age_s);
+  config.max_surface_jump_ratio = p.param("max_surface_jump_ratio", config.max_surface_jump_ratio);
+  config.frames_kept =
+      static_cast<std::size_t>(p.param("frames_kept", static_cast<int>(config.frames_kept)));
+  ebslam::DepthEventFusion core(sensors, config);
+
+  const double period = 1.0 / sensors.depth_frame_rate_hz;
+  const ros::Time base = ros::Time::now() + ros::Duration(1000.0);  // after the other tests
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> pixel(0, 129);  // 128, 129: outside the 128 x 128 eDVS
+  std::size_t compared = 0, with_depth = 0, differing = 0;
+  for (int k = 0; k < 12; ++k) {
+    const ros::Time t_k = base + ros::Duration(k * period);
+    const cv::Mat depth = sceneDepth(k);
+    depth_pub.publish(toImageMsg(depth, t_k));
+    core.addDepthFrame(depth, t_k.toSec());
+    for (const auto& [from, to] : {std::pair{-0.95, -0.05}, std::pair{0.0, 0.45}}) {
+      ebslam_msgs::EventArray in;
+      in.header.frame_id = "edvs_optical_frame";
+      in.width = in.height = 128;
+      constexpr int kEvents = 300;
+      for (int i = 0; i < kEvents; ++i) {
+        ebslam_msgs::Event e;
+        e.x = static_cast<std::uint16_t>(pixel(random));
+        e.y = static_cast<std::uint16_t>(pixel(random));
+        e.ts = t_k + ros::Duration((from + (to - from) * i / (kEvents - 1)) * period);
+        e.polarity = (i % 3) == 0;
+        in.events.push_back(e);
+      }
+      in.header.stamp = in.events.back().ts;
+      events_pub.publish(in);
+      const std::size_t index = out.size();
+      ASSERT_TRUE(waitFor([&] { return out.size() > index; })) << "frame " << k;
+      const ebslam_msgs::DepthEventArray& node = out[index];
+      ASSERT_EQ(node.header.stamp, in.header.stamp) << "frame " << k;
+      ASSERT_EQ(node.events.size(), in.events.size());
+      for (std::size_t i = 0; i < in.events.size(); ++i) {
+        const ebslam::FusedEvent c = core.fuse(ebslam_msgs::fromMsg(in.events[i]));
+        const ebslam_msgs::DepthEvent& d = node.events[i];
+        const auto same = [](float a, float b) {
+          return (std::isnan(a) && std::isnan(b)) || a == b;
+        };
+        const bool equal = d.x == in.events[i].x && d.y == in.events[i].y &&
+                           d.ts == in.events[i].ts && d.polarity == in.events[i].polarity &&
+                           same(d.depth, c.depth_m) && same(d.point.x, c.point.x()) &&
+                           same(d.point.y, c.point.y()) && same(d.point.z, c.point.z());
+        ++compared;
+        with_depth += std::isfinite(c.depth_m) ? 1 : 0;
+        if (!equal && differing++ < 3) {
+          ADD_FAILURE() << "frame " << k << ", event " << i << " (" << d.x << ", " << d.y
+                        << "): node depth " << d.depth << ", core " << c.depth_m << " ("
+                        << ebslam::toString(c.status) << ")";
+        }
+      }
+    }
+  }
+  EXPECT_EQ(differing, 0u) << "of " << compared << " events";
+  // The scene gives most events a depth and some none (hole, outside, box edges).
+  EXPECT_GT(with_depth, compared / 2);
+  EXPECT_LT(with_depth, compared);
 }
 
 }  // namespace

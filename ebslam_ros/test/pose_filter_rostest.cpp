@@ -2,8 +2,10 @@
 // event_slam2d.test, event_particle_filter_bad_map.test). The test publishes the events a
 // static upward-looking eDVS sees under test/data/ceiling_lines.yaml (lines at known
 // positions) and asserts the outputs' content, frame and stamp, the tf tree, the services, and
-// that injected bad input is dropped with the node running on.
+// that injected bad input is dropped with the node running on, and that the node's poses equal
+// the core filter's (ebslam/slam/ebpf.h, ebslam2d.h) run in this process on the same messages.
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <ebslam_msgs/EventArray.h>
 #include <ebslam_msgs/ResetPose.h>
 #include <ebslam_msgs/SaveMap.h>
@@ -14,6 +16,7 @@
 #include <nav_msgs/Path.h>
 #include <nodelet/NodeletList.h>
 #include <nodelet/NodeletLoad.h>
+#include <nodelet/NodeletUnload.h>
 #include <ros/package.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
@@ -27,13 +30,20 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
+#include <ebslam/slam/ceiling_camera.h>
+#include <ebslam/slam/ebpf.h>
+#include <ebslam/slam/ebslam2d.h>
+
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/ceiling_map_io.h"
+#include "ebslam_ros/conversions.h"
 
 #include "rostest_util.h"
 
@@ -144,6 +154,138 @@ class PoseFilterTest : public ::testing::Test {
   std::vector<std::pair<int, int>> pixels_;
   std::size_t cursor_ = 0;
 };
+
+// The node against its core: after a reset, the messages of a moving sensor through the node and
+// through the core filter built here from the node's parameters (the .test file's values over the
+// core's defaults), one process() call per message as the node makes it: every pose equal to the
+// bit, with the last event's stamp. A change in the ROS layer (conversions, input checks, mounting,
+// parameters, chunking) that alters a result fails here.
+TEST_F(PoseFilterTest, PosesEqualTheCoreFilterOnTheSameMessages) {
+  bool slam = false;
+  ros::param::get("~slam", slam);
+  ebslam_msgs::ResetPose reset;  // to ~initial_pose, a new filter with the node's seed
+  ASSERT_TRUE(ros::service::call("reset", reset));
+  ASSERT_TRUE(reset.response.success) << reset.response.message;
+  constexpr double kVx = 0.15, kVy = -0.1, kOmega = 0.2;  // [m/s], [m/s], [rad/s] in the map
+  constexpr int kMessages = 80;                           // 0.8 s of 100 Hz messages
+  const std::int64_t t0 = g_next_t;
+  std::vector<ebslam_msgs::EventArray> sent;
+  const std::size_t first_pose = poses_.size();
+  for (int k = 0; k < kMessages; ++k) {
+    const double t = 0.01 * k;
+    pixels_ = edgePixels(kStartX + kVx * t, kStartY + kVy * t, kStartTheta + kOmega * t);
+    cursor_ = 0;
+    sent.push_back(makeEvents(t0 + 10000 * k, 2000, 5));
+    ASSERT_TRUE(publishAndAwait(sent.back())) << "no pose for message " << k;
+  }
+  g_next_t = t0 + 10000 * kMessages;
+  ASSERT_EQ(poses_.size() - first_pose, sent.size());
+
+  // The core with the node's parameters (pose_filter_params.cpp, ceiling_sensor_params.cpp).
+  ros::NodeHandle p(slam ? "/slam" : "/ebpf");
+  // Over the core's defaults, which differ between the two (EB-SLAM-2D: N = 10, G0 = 30).
+  const auto overlay = [&p](ebslam::EventFilterConfig f) {
+    f.num_particles = p.param("num_particles", f.num_particles);
+    f.batch_size = p.param("batch_size", f.batch_size);
+    f.resample_every = p.param("resample_every", f.resample_every);
+    f.beta = p.param("beta", f.beta);
+    f.g0 = p.param("g0", f.g0);
+    f.experimental.diffusion_scale = p.param("diffusion_scale", f.experimental.diffusion_scale);
+    f.initial_spread_m = p.param("initial_spread", f.initial_spread_m);
+    f.initial_spread_rad = p.param("initial_spread_rad", f.initial_spread_rad);
+    f.latency_compensation_s = p.param("latency_compensation", f.latency_compensation_s);
+    f.experimental.reset_scores_on_resample =
+        p.param("reset_scores_on_resample", f.experimental.reset_scores_on_resample);
+    return f;
+  };
+  // Every parameter of the node is one mirrored here or one without effect on the poses (the
+  // knobs' server copies include the denoiser's, off).
+  const std::set<std::string> mirrored{"num_particles",
+                                       "batch_size",
+                                       "resample_every",
+                                       "beta",
+                                       "g0",
+                                       "diffusion_scale",
+                                       "initial_spread",
+                                       "initial_spread_rad",
+                                       "latency_compensation",
+                                       "reset_scores_on_resample",
+                                       "gamma",
+                                       "map",
+                                       "map_size",
+                                       "cell_size",
+                                       "splat_sigma",
+                                       "initial_pose",
+                                       "mount_xyz",
+                                       "path_length",
+                                       "map_publish_period",
+                                       "denoise",
+                                       "denoise_window",
+                                       "denoise_min_support",
+                                       "denoise_polarity_match"};
+  std::vector<std::string> names;
+  ASSERT_TRUE(ros::param::getParamNames(names));
+  for (const std::string& name : names) {
+    if (name.rfind(p.getNamespace() + "/", 0) != 0) continue;
+    EXPECT_EQ(mirrored.count(name.substr(p.getNamespace().size() + 1)), 1u)
+        << name << ": a parameter this test does not mirror";
+  }
+  ASSERT_FALSE(p.param("denoise", false));
+  const ebslam::CeilingCamera camera(ebslam::CameraModel{}, 2.59);
+  std::vector<double> start_xyz, mount_xyz;
+  ASSERT_TRUE(p.getParam("initial_pose", start_xyz) && start_xyz.size() == 3);
+  ASSERT_TRUE(p.getParam("mount_xyz", mount_xyz) && mount_xyz.size() == 3);
+  const ebslam::Pose2 mount{mount_xyz[0], mount_xyz[1], 0.0};  // ~mount_rpy: zero (looking up)
+  const ebslam::Pose2 start =
+      ebslam::compose(ebslam::Pose2{start_xyz[0], start_xyz[1], start_xyz[2]}, mount);
+  std::unique_ptr<ebslam::EventParticleFilter> ebpf;
+  std::unique_ptr<ebslam::EventSlam2d> slam2d;
+  if (slam) {
+    ebslam::Ebslam2dConfig c;
+    c.filter = overlay(c.filter);
+    c.map_size_m = p.param("map_size", c.map_size_m);
+    c.cell_size_wtrig = p.param("cell_size", c.cell_size_wtrig);
+    c.splat_sigma_wtrig = p.param("splat_sigma", c.splat_sigma_wtrig);
+    slam2d = std::make_unique<ebslam::EventSlam2d>(c, camera, start);
+  } else {
+    ebslam::EbpfConfig c;
+    c.filter = overlay(c.filter);
+    c.gamma = p.param("gamma", c.gamma);
+    std::string map;
+    ASSERT_TRUE(p.getParam("map", map));
+    const ebslam_ros::CeilingEdgeMap edges = ebslam_ros::loadCeilingMap(map);
+    ebpf = std::make_unique<ebslam::EventParticleFilter>(
+        c, camera,
+        ebslam::makeEdgeLikelihoodMap(edges.edges, edges.resolution_m, edges.origin_centre_m,
+                                      c.gamma * camera.wTrig()),
+        start);
+  }
+  std::size_t differing = 0;
+  for (std::size_t k = 0; k < sent.size(); ++k) {
+    const ebslam::EventVector events = ebslam_msgs::fromMsg(sent[k]);
+    slam ? slam2d->process(events) : ebpf->process(events);
+    const ebslam::Pose2 sensor = slam ? slam2d->estimate() : ebpf->estimate();
+    const geometry_msgs::Pose core =
+        ebslam_ros::toPoseMsg(ebslam::compose(sensor, ebslam::inverse(mount)));
+    const auto& node = poses_[first_pose + k];
+    EXPECT_EQ(node.header.stamp, sent[k].header.stamp) << "message " << k;
+    const geometry_msgs::Pose& n = node.pose.pose;
+    const bool same = n.position.x == core.position.x && n.position.y == core.position.y &&
+                      n.position.z == core.position.z && n.orientation.x == core.orientation.x &&
+                      n.orientation.y == core.orientation.y &&
+                      n.orientation.z == core.orientation.z &&
+                      n.orientation.w == core.orientation.w;
+    if (!same && differing++ < 3) {
+      ADD_FAILURE() << "message " << k << ": node (" << n.position.x << ", " << n.position.y << ", "
+                    << tf2::getYaw(n.orientation) << "), core (" << core.position.x << ", "
+                    << core.position.y << ", " << tf2::getYaw(core.orientation) << ")";
+    }
+  }
+  EXPECT_EQ(differing, 0u) << "of " << sent.size() << " poses";
+  // Not a filter standing still: the poses followed the path.
+  const auto& last = poses_.back().pose.pose;
+  EXPECT_GT(std::hypot(last.position.x - kStartX, last.position.y - kStartY), 0.08);
+}
 
 TEST_F(PoseFilterTest, PosesCarryTheLastEventsStampMapFrameAndSpread) {
   const std::int64_t end = feed(g_next_t, 20);
@@ -477,6 +619,118 @@ TEST(EventSlam2dOutputs, LatchedMapImageAndSaveMap) {
   save.request.path_prefix = "/nonexistent_dir/map";
   ASSERT_TRUE(ros::service::call("save_map", save));
   EXPECT_FALSE(save.response.success);
+}
+
+// Knobs across a restart (event_particle_filter.test): a knob changed through dynamic_reconfigure
+// acts at once but is not written to the parameter server, so a restarted node starts from the
+// launch file's value again (ebslam_ros_common/runtime_knobs.h). The test loads a second
+// EventParticleFilter into the manager, changes ~num_particles (set by the "launch file") and ~g0
+// (not set), unloads it and loads it again with the same parameters.
+TEST(KnobsAcrossRestarts, AKnobChangeLastsUntilTheNodeStops) {
+  bool knobs_test = false;
+  ros::param::get("~knobs_test", knobs_test);
+  if (!knobs_test) GTEST_SKIP() << "only in event_particle_filter.test";
+  ros::NodeHandle nh;
+  const std::string name = "/knobs_ebpf";
+  ros::NodeHandle p(name);
+  p.setParam("map", ros::package::getPath("ebslam_ros") + "/test/data/ceiling_lines.yaml");
+  p.setParam("initial_pose", std::vector<double>{kStartX, kStartY, kStartTheta});
+  p.setParam("mount_xyz", std::vector<double>{kMountX, 0.0, 0.3});
+  p.setParam("num_particles", 20);  // the launch file's value
+  p.setParam("publish_tf", false);  // the fixture's filter owns map -> odom
+  const auto load = [&] {
+    nodelet::NodeletLoad request;
+    request.request.name = name;
+    request.request.type = "ebslam_ros/EventParticleFilter";
+    for (const std::string topic : {"events", "pose", "particles", "path", "reset"}) {
+      request.request.remap_source_args.push_back("/" + topic);
+      request.request.remap_target_args.push_back(name + "/" + topic);
+    }
+    return ros::service::call("/manager/load_nodelet", request) && request.response.success;
+  };
+  ros::Publisher events_pub = nh.advertise<ebslam_msgs::EventArray>(name + "/events", 10);
+  std::vector<geometry_msgs::PoseArray> particles;
+  ros::Subscriber particles_sub = nh.subscribe<geometry_msgs::PoseArray>(
+      name + "/particles", 10,
+      [&](const geometry_msgs::PoseArray::ConstPtr& m) { particles.push_back(*m); });
+  std::int64_t t = kT0;
+  const std::vector<std::pair<int, int>> pixels = edgePixels(kStartX, kStartY, kStartTheta);
+  // The particle count of the pose for one more message.
+  const auto particleCount = [&]() -> std::size_t {
+    particles.clear();
+    ebslam_msgs::EventArray msg;
+    msg.header.frame_id = "edvs_optical_frame";
+    msg.width = msg.height = 128;
+    for (std::size_t i = 0; i < 500; ++i) {
+      ebslam_msgs::Event e;
+      e.x = static_cast<std::uint16_t>(pixels[i % pixels.size()].first);
+      e.y = static_cast<std::uint16_t>(pixels[i % pixels.size()].second);
+      e.ts = ebslam_msgs::toRosTime(t + static_cast<std::int64_t>(i) * 10);
+      msg.events.push_back(e);
+    }
+    msg.header.stamp = msg.events.back().ts;
+    t += 10000;
+    events_pub.publish(msg);
+    ebslam_ros_test::spinUntil([&] { return !particles.empty(); }, 20.0);
+    return particles.empty() ? 0 : particles.back().poses.size();
+  };
+  const auto connect = [&] {
+    return ebslam_ros_test::spinUntil(
+        [&] { return events_pub.getNumSubscribers() > 0 && particles_sub.getNumPublishers() > 0; },
+        20.0);
+  };
+
+  ASSERT_TRUE(load());
+  ASSERT_TRUE(connect());
+  ros::WallDuration(0.3).sleep();
+  EXPECT_EQ(particleCount(), 20u);
+  dynamic_reconfigure::Reconfigure knobs;
+  dynamic_reconfigure::IntParameter count;
+  count.name = "num_particles";
+  count.value = 45;
+  dynamic_reconfigure::DoubleParameter g0;
+  g0.name = "g0";
+  g0.value = 75.0;
+  knobs.request.config.ints.push_back(count);
+  knobs.request.config.doubles.push_back(g0);
+  ASSERT_TRUE(ros::service::call(name + "/set_parameters", knobs));
+  EXPECT_EQ(particleCount(), 45u) << "the knob acts at once";
+  // The server keeps what the launch file set, and no value nobody set.
+  int on_server = 0;
+  EXPECT_TRUE(ebslam_ros_test::spinUntil(
+      [&] {
+        return p.getParam("num_particles", on_server) && on_server == 20 && !p.hasParam("g0");
+      },
+      5.0))
+      << "~num_particles on the server: " << on_server << ", ~g0 "
+      << (p.hasParam("g0") ? "set" : "not set");
+
+  nodelet::NodeletUnload unload;
+  unload.request.name = name;
+  ASSERT_TRUE(ros::service::call("/manager/unload_nodelet", unload) && unload.response.success);
+  ASSERT_TRUE(
+      ebslam_ros_test::spinUntil([&] { return particles_sub.getNumPublishers() == 0; }, 20.0));
+  ASSERT_TRUE(load());
+  ASSERT_TRUE(connect());
+  ros::WallDuration(0.3).sleep();
+  t += 10000000;  // a later stream: the new node has no past
+  EXPECT_EQ(particleCount(), 20u) << "the restarted node starts from the launch file's value";
+  // Its knobs say so to dynamic_reconfigure clients (an empty request returns the current ones).
+  dynamic_reconfigure::Reconfigure current;
+  ASSERT_TRUE(ros::service::call(name + "/set_parameters", current));
+  for (const auto& i : current.response.config.ints) {
+    if (i.name == "num_particles") {
+      EXPECT_EQ(i.value, 20);
+    }
+  }
+  for (const auto& d : current.response.config.doubles) {
+    if (d.name == "g0") {
+      EXPECT_EQ(d.value, 60.0);  // EB-PF's G0
+    }
+  }
+  ASSERT_TRUE(ros::service::call("/manager/unload_nodelet", unload) && unload.response.success);
+  EXPECT_TRUE(p.getParam("num_particles", on_server) && on_server == 20);
+  EXPECT_FALSE(p.hasParam("g0")) << "a knob value no one set stayed on the server";
 }
 
 // A map that does not exist or is not an image: the nodelet says why and refuses to load; the
