@@ -14,9 +14,9 @@
 #include <dasp/dasp.h>
 #include <dasp/superpixel_graph.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/SuperpixelArray.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -65,7 +65,7 @@ class DaspNodelet : public nodelet::Nodelet {
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("superpixels/markers", 1);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("superpixels/cloud", 1);
 
-    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<DaspNodeletConfig>>(pnh);
+    reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<DaspNodeletConfig>>(pnh);
     ebslam_ros_common::markReconfigureParamsRead<DaspNodeletConfig>(pnh);
     reconfigure_->setCallback(
         [this](DaspNodeletConfig& c, uint32_t level) { onReconfigure(c, level); });
@@ -193,7 +193,7 @@ class DaspNodelet : public nodelet::Nodelet {
   std::unique_ptr<RgbdInput> input_;
   ros::Publisher superpixels_pub_, markers_pub_, cloud_pub_;
   image_transport::Publisher labels_pub_, overlay_pub_;
-  std::unique_ptr<dynamic_reconfigure::Server<DaspNodeletConfig>> reconfigure_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<DaspNodeletConfig>> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::WallTimer watchdog_;
 

@@ -16,10 +16,10 @@
 #include <dasp/sdasp.h>
 #include <dasp/segmentation.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <dynamic_reconfigure/server.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <image_transport/image_transport.h>
 #include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
@@ -64,7 +64,7 @@ class SdaspNodelet : public nodelet::Nodelet {
     overlay_pub_ = transport.advertise("segments/overlay", 1);
     ucm_pub_ = transport.advertise("segments/ucm", 1);
 
-    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<SdaspNodeletConfig>>(pnh);
+    reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<SdaspNodeletConfig>>(pnh);
     ebslam_ros_common::markReconfigureParamsRead<SdaspNodeletConfig>(pnh);
     reconfigure_->setCallback([this](SdaspNodeletConfig& c, uint32_t) {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -193,7 +193,7 @@ class SdaspNodelet : public nodelet::Nodelet {
   std::unique_ptr<message_filters::Synchronizer<Policy>> sync_;
   ros::Publisher segmentation_pub_;
   image_transport::Publisher labels_pub_, overlay_pub_, ucm_pub_;
-  std::unique_ptr<dynamic_reconfigure::Server<SdaspNodeletConfig>> reconfigure_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<SdaspNodeletConfig>> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::WallTimer diagnostics_timer_;
 

@@ -1,8 +1,11 @@
 // rostest of dasp_ros/Tdasp on the sample session (a moving camera over a table): outputs carry
 // the input's stamp and frame, strand ids persist from frame to frame, the strand graph stays
 // within ~strands/max_strands, and the stream is reset by the service, by a stamp going back and
-// by a change of image size; bad input is reported naming the topic and the next frame is used.
+// by a change of image size; bad input is reported naming the topic and the next frame is used;
+// the outputs equal the core's (dasp/tdasp.h) run in this process on the same frames.
 #include <dasp/rgbd_io.h>
+#include <dasp/superpixel_graph.h>
+#include <dasp/tdasp.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
@@ -18,6 +21,7 @@
 #include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -44,6 +48,11 @@ class Tdasp : public ::testing::Test {
         "superpixels", 50, [this](const ebslam_msgs::SuperpixelArrayConstPtr& m) {
           std::lock_guard<std::mutex> lock(mutex_);
           arrays_[m->header.stamp.toSec()] = *m;
+        }));
+    subs_.push_back(nh.subscribe<sensor_msgs::Image>(
+        "superpixels/labels", 50, [this](const sensor_msgs::ImageConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          superpixel_labels_[m->header.stamp.toSec()] = *m;
         }));
     subs_.push_back(nh.subscribe<sensor_msgs::Image>(
         "segments/labels", 50, [this](const sensor_msgs::ImageConstPtr& m) {
@@ -114,7 +123,7 @@ class Tdasp : public ::testing::Test {
         [&] {
           std::lock_guard<std::mutex> lock(mutex_);
           return segmentations_.count(stamp) > 0 && arrays_.count(stamp) > 0 &&
-                 segment_labels_.count(stamp) > 0;
+                 segment_labels_.count(stamp) > 0 && superpixel_labels_.count(stamp) > 0;
         },
         15.0))
         << "no output for the frame at " << stamp;
@@ -139,7 +148,7 @@ class Tdasp : public ::testing::Test {
   std::mutex mutex_;
   std::map<double, ebslam_msgs::Segmentation> segmentations_;
   std::map<double, ebslam_msgs::SuperpixelArray> arrays_;
-  std::map<double, sensor_msgs::Image> segment_labels_;
+  std::map<double, sensor_msgs::Image> segment_labels_, superpixel_labels_;
   std::vector<std::string> log_;
   int max_strands_seen_ = 0;
   ros::AsyncSpinner spinner_{2};
@@ -215,6 +224,78 @@ TEST_F(Tdasp, StrandsPersistStateIsBoundedAndTheStreamResets) {
       5.0));
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_LE(max_strands_seen_, 700);
+}
+
+// The node against its core: after a reset, the six sample frames through the node and through
+// dasp::TemporalDasp built here from the node's parameters (the .test file's values over the
+// core's defaults). Superpixels, their graph and label image equal to the bit; strand ids, segment
+// ids and the segment label image equal up to the node's per-stream offset (which keeps ids
+// unique over resets), one offset for the whole stream.
+TEST_F(Tdasp, OutputsEqualTheCoreOnTheSameFrames) {
+  std_srvs::Trigger trigger;
+  ASSERT_TRUE(ros::service::call("/camera/tdasp/reset", trigger));
+  ros::NodeHandle p("/camera/tdasp");
+  std::vector<std::string> names;
+  ASSERT_TRUE(ros::param::getParamNames(names));
+  for (const std::string& name : names) {
+    if (name.rfind("/camera/tdasp/", 0) != 0) continue;
+    const std::string key = name.substr(std::string("/camera/tdasp/").size());
+    EXPECT_TRUE(key == "superpixel_count" || key == "strands/max_strands")
+        << name << ": a parameter this test does not mirror";
+  }
+  dasp::TdaspConfig config;
+  config.superpixels.dasp.superpixel_count =
+      p.param("superpixel_count", config.superpixels.dasp.superpixel_count);
+  config.strands.max_strands = p.param("strands/max_strands", config.strands.max_strands);
+  dasp::TemporalDasp core(config);
+  std::optional<std::int64_t> strand_offset, label_offset;
+  for (int i = 0; i < 6; ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    const double stamp = 30.0 + i;
+    const ebslam_msgs::Segmentation segmentation =
+        process(frames_[static_cast<std::size_t>(i)], stamp);
+    const dasp::TdaspFrame expected = core.process(frames_[static_cast<std::size_t>(i)]);
+    std_msgs::Header header;
+    header.stamp = ros::Time(stamp);
+    header.frame_id = kFrame;
+    const dasp::Superpixels& superpixels = expected.superpixels.superpixels;
+    ebslam_msgs::SuperpixelArray array = dasp_ros::toSuperpixelArrayMsg(superpixels, header);
+    array.edges =
+        dasp_ros::toEdgeMsgs(dasp::buildSuperpixelGraph(superpixels, config.strands.graph));
+    sensor_msgs::Image labels = dasp_ros::toLabelImageMsg(superpixels.labels, header);
+    std::lock_guard<std::mutex> lock(mutex_);
+    // header.seq is renumbered by roscpp per publisher: not part of the content.
+    array.header.seq = arrays_[stamp].header.seq;
+    labels.header.seq = superpixel_labels_[stamp].header.seq;
+    EXPECT_TRUE(arrays_[stamp] == array)
+        << "superpixels: node " << arrays_[stamp].superpixels.size() << ", core "
+        << array.superpixels.size();
+    EXPECT_TRUE(superpixel_labels_[stamp] == labels) << "superpixel label image";
+    ASSERT_EQ(segmentation.strand_ids.size(), expected.strand_id.size());
+    ASSERT_EQ(segmentation.segment_ids.size(), expected.segment_label.size());
+    ASSERT_FALSE(expected.strand_id.empty());
+    if (!strand_offset) {
+      strand_offset = segmentation.strand_ids[0] - expected.strand_id[0];
+      label_offset = segmentation.segment_ids[0] - expected.segment_label[0];
+      EXPECT_GE(*strand_offset, 0);
+      EXPECT_GE(*label_offset, 0);
+    }
+    std::size_t strands_differing = 0, segments_differing = 0;
+    for (std::size_t k = 0; k < expected.strand_id.size(); ++k) {
+      strands_differing += segmentation.strand_ids[k] != expected.strand_id[k] + *strand_offset;
+      segments_differing +=
+          segmentation.segment_ids[k] != expected.segment_label[k] + *label_offset;
+    }
+    EXPECT_EQ(strands_differing, 0u) << "of " << expected.strand_id.size() << " strand ids";
+    EXPECT_EQ(segments_differing, 0u) << "of " << expected.segment_label.size() << " segment ids";
+    EXPECT_EQ(segmentation.threshold, config.hysteresis.normal);
+    // Segment label image: the core's label plus the offset, -1 (no superpixel) kept.
+    cv::Mat shifted = expected.segment_labels + static_cast<int>(*label_offset);
+    shifted.setTo(-1, expected.segment_labels < 0);
+    const cv::Mat node = dasp_ros::toLabelMat(segment_labels_[stamp]);
+    ASSERT_EQ(node.size(), shifted.size());
+    EXPECT_EQ(cv::countNonZero(node != shifted), 0) << "segment label image";
+  }
 }
 
 }  // namespace

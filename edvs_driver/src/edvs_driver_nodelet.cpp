@@ -7,7 +7,7 @@
 // device time - device time of that first event). Never runs backwards, not even across reconnects.
 
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <dynamic_reconfigure/server.h>
+#include <ebslam_ros_common/runtime_knobs.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -51,7 +51,7 @@ class EdvsDriverNodelet : public nodelet::Nodelet {
   std::unique_ptr<camera_info_manager::CameraInfoManager> info_manager_;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   boost::recursive_mutex reconfigure_mutex_;
-  std::unique_ptr<dynamic_reconfigure::Server<EdvsConfig>> reconfigure_server_;
+  std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EdvsConfig>> reconfigure_server_;
   ros::WallTimer publish_timer_;
   ros::WallTimer diagnostics_timer_;
 
@@ -104,7 +104,7 @@ void EdvsDriverNodelet::onInit() {
       ros::WallDuration(0.25), [this](const ros::WallTimerEvent&) { updater_->update(); });
 
   reconfigure_server_ =
-      std::make_unique<dynamic_reconfigure::Server<EdvsConfig>>(reconfigure_mutex_, pnh);
+      std::make_unique<ebslam_ros_common::RuntimeKnobs<EdvsConfig>>(reconfigure_mutex_, pnh);
   ebslam_ros_common::markReconfigureParamsRead<EdvsConfig>(pnh);
   reconfigure_server_->setCallback(
       [this](EdvsConfig& c, std::uint32_t level) { reconfigure(c, level); });
