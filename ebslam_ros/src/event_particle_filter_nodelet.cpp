@@ -38,6 +38,21 @@ class EventParticleFilterNodelet : public PlanarPoseFilterNodelet {
     }
     double g0() const override { return filter_.g0(); }
     std::uint64_t processedEvents() const override { return filter_.processedEvents(); }
+    bool localisesOnMap() const override { return true; }
+    void reseed(const ebslam::Pose2& sensor, const Eigen::Matrix3d& covariance) override {
+      filter_.reseed(sensor, covariance);
+    }
+    void globalLocalisation() override { filter_.globalLocalisation(); }
+    void applyOdometry(const ebslam::Pose2& sensor_delta) override {
+      filter_.applyOdometry(sensor_delta);
+    }
+    ebslam::TrackingState trackingState() const override { return filter_.state(); }
+    std::uint64_t recoveries() const override { return filter_.recoveries(); }
+    std::uint64_t convergences() const override { return filter_.convergences(); }
+    CovarianceModel covarianceModel() const override {
+      const ebslam::EbpfLocalisationConfig& l = filter_.config().localisation;
+      return {l.covariance_scale, l.covariance_floor_m, l.covariance_floor_rad};
+    }
 
    private:
     ebslam::EventParticleFilter filter_;
@@ -58,6 +73,7 @@ class EventParticleFilterNodelet : public PlanarPoseFilterNodelet {
                    config.filter.filter.num_particles, config.filter.filter.batch_size,
                    config.filter.filter.resample_every);
       const ebslam::EbpfConfig ebpf = config.filter;
+      enableMapLocalisation(config.use_odometry);
       startFilter(
           config.node, ebpf.filter,
           [this, ebpf, camera](const ebslam::Pose2& start, const ebslam::EventFilterConfig& knobs) {

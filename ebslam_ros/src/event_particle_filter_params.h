@@ -13,8 +13,13 @@ namespace ebslam_ros {
 
 struct EventParticleFilterNodeConfig {
   PoseFilterNodeConfig node;
-  ebslam::EbpfConfig filter;  ///< plus ~gamma (sensor model sigma [W_trig])
-  std::string map_yaml;       ///< ~map: ceiling map yaml (map_server style or simulator's)
+  /// plus ~gamma (sensor model sigma [W_trig]) and the localisation parameters with AMCL's
+  /// names where they match (~min_particles, ~max_particles, ~kld_err, ~kld_z,
+  /// ~recovery_alpha_slow, ~recovery_alpha_fast, ~odom_alpha1..4; README.md lists them all)
+  ebslam::EbpfConfig filter;
+  std::string map_yaml;  ///< ~map: ceiling map yaml (map_server style or simulator's)
+  /// ~use_odometry: odom -> base_link from tf moves the particles between event batches.
+  bool use_odometry = false;
 };
 EventParticleFilterNodeConfig loadEventParticleFilterNodeConfig(const ros::NodeHandle& private_nh);
 

@@ -14,6 +14,10 @@ using ebslam_ros_common::requirePositive;
 EventSlam2dNodeConfig loadEventSlam2dNodeConfig(const ros::NodeHandle& nh) {
   EventSlam2dNodeConfig config;
   config.node = loadPoseFilterNodeConfig(nh);
+  if (config.node.initial_pose_unknown) {
+    // EB-SLAM-2D's map frame is where it starts: there is no map to search.
+    fail(nh, "initial_pose", "= \"unknown\" needs a known map (EventParticleFilter)");
+  }
   ebslam::Ebslam2dConfig& s = config.slam;
   s.filter = loadEventFilterConfig(nh, s.filter);
   s.noise_aware_diffusion = param<bool>(nh, "noise_aware_diffusion", s.noise_aware_diffusion);

@@ -4,6 +4,8 @@
 #include <tf2/LinearMath/Matrix3x3.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -54,6 +56,13 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& private_nh = getPrivateNodeHandle();
   reset_srv_ = nh.advertiseService("reset", &PlanarPoseFilterNodelet::onReset, this);
+  if (map_localisation_) {
+    initial_pose_sub_ =
+        nh.subscribe("initialpose", 2, &PlanarPoseFilterNodelet::onInitialPose, this);
+    global_srv_ = nh.advertiseService("global_localization",
+                                      &PlanarPoseFilterNodelet::onGlobalLocalization, this);
+    pending_global_ = config_.initial_pose_unknown;
+  }
 
   reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<EventFilterKnobsConfig>>(
       reconfigure_mutex_, private_nh);
@@ -104,6 +113,186 @@ void PlanarPoseFilterNodelet::makeDenoiser() {
 void PlanarPoseFilterNodelet::restart(const ebslam::Pose2& base_pose) {
   backend_ = factory_(ebslam::compose(base_pose, *mount_), knobs_);
   clearPath();
+  last_odom_.reset();
+  applyPendingSeed();
+}
+
+void PlanarPoseFilterNodelet::applyPendingSeed() {
+  if (!backend_ || !backend_->localisesOnMap()) return;
+  if (pending_seed_) {
+    backend_->reseed(pending_seed_->sensor, pending_seed_->covariance);  // validated on receipt
+    pending_seed_.reset();
+    pending_global_ = false;
+  } else if (pending_global_) {
+    backend_->globalLocalisation();
+    pending_global_ = false;
+  }
+}
+
+namespace {
+
+// Covariance of (x, y, yaw) from a ROS pose covariance (x y z rx ry rz order).
+Eigen::Matrix3d planarCovariance(const geometry_msgs::PoseWithCovariance::_covariance_type& c) {
+  const int index[3] = {0, 1, 5};
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) m(r, k) = c[static_cast<std::size_t>(6 * index[r] + index[k])];
+  }
+  return m;
+}
+
+// Jacobian of the sensor pose base (+) mount with respect to the base pose (x, y, theta).
+Eigen::Matrix3d mountJacobian(const ebslam::Pose2& base, const ebslam::Pose2& mount) {
+  const double c = std::cos(base.theta), s = std::sin(base.theta);
+  Eigen::Matrix3d j = Eigen::Matrix3d::Identity();
+  j(0, 2) = -s * mount.x - c * mount.y;
+  j(1, 2) = c * mount.x - s * mount.y;
+  return j;
+}
+
+}  // namespace
+
+void PlanarPoseFilterNodelet::onInitialPose(
+    const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex());
+  const auto reject = [&](const std::string& why) {
+    ++rejected_initial_poses_;
+    ++counters().bad_input;
+    ROS_ERROR_THROTTLE(kWarnPeriodS, "%s: initialpose ignored: %s", getName().c_str(), why.c_str());
+  };
+  const geometry_msgs::Pose& p = msg->pose.pose;
+  const double q_norm =
+      std::sqrt(p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y +
+                p.orientation.z * p.orientation.z + p.orientation.w * p.orientation.w);
+  if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) ||
+      !std::isfinite(p.position.z) || !(std::abs(q_norm - 1.0) < 1e-3)) {
+    reject("the pose must be finite with a unit quaternion");
+    return;
+  }
+  for (double v : msg->pose.covariance) {
+    if (!std::isfinite(v)) {
+      reject("the covariance must be finite");
+      return;
+    }
+  }
+  // Into the map frame: rviz sends its fixed frame, which may be another one (tf2, latest).
+  tf2::Transform in_frame;
+  tf2::fromMsg(p, in_frame);
+  tf2::Transform map_from_frame = tf2::Transform::getIdentity();
+  const std::string& map_frame = poseNodeConfig().map_frame;
+  const std::string frame = msg->header.frame_id.empty() ? map_frame : msg->header.frame_id;
+  if (frame != map_frame) {
+    try {
+      tf2::fromMsg(tfBuffer().lookupTransform(map_frame, frame, ros::Time(0)).transform,
+                   map_from_frame);
+    } catch (const tf2::TransformException& error) {
+      reject("no transform from frame " + frame + " to " + map_frame + ": " + error.what());
+      return;
+    }
+  }
+  const tf2::Transform base_in_map = map_from_frame * in_frame;
+  const tf2::Matrix3x3& r = base_in_map.getBasis();
+  const ebslam::Pose2 base{base_in_map.getOrigin().x(), base_in_map.getOrigin().y(),
+                           std::atan2(r[1][0], r[0][0])};
+  // The covariance turns with the frame (its rotation about z; roll and pitch are ignored).
+  const tf2::Matrix3x3& fr = map_from_frame.getBasis();
+  const double yaw = std::atan2(fr[1][0], fr[0][0]);
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  rotation.topLeftCorner<2, 2>() << std::cos(yaw), -std::sin(yaw), std::sin(yaw), std::cos(yaw);
+  const Eigen::Matrix3d given = planarCovariance(msg->pose.covariance);
+  const Eigen::Matrix3d base_cov = rotation * given * rotation.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(base_cov);
+  if (!given.isApprox(given.transpose(), 1e-6) || eig.eigenvalues().minCoeff() < -1e-9) {
+    reject("the (x, y, yaw) covariance must be symmetric positive semi-definite");
+    return;
+  }
+  if (!resolveMount()) {
+    reject("the sensor mounting is not known yet (tf " + config_.base_frame + " -> " +
+           config_.sensor_frame + ")");
+    return;
+  }
+  const Eigen::Matrix3d j = mountJacobian(base, *mount_);
+  Seed seed{ebslam::compose(base, *mount_), j * base_cov * j.transpose()};
+  seed.covariance = 0.5 * (seed.covariance + seed.covariance.transpose());
+  if (backend_) {
+    try {
+      backend_->reseed(seed.sensor, seed.covariance);
+    } catch (const std::invalid_argument& error) {
+      reject(error.what());
+      return;
+    }
+    clearPath();
+  } else {
+    pending_seed_ = seed;
+  }
+  pending_global_ = false;
+  start_pose_ = base;
+  ++initial_poses_;
+  ROS_INFO("%s: initial pose (%.3f, %.3f, %.3f) in %s, std. dev. (%.3f m, %.3f m, %.3f rad)",
+           getName().c_str(), base.x, base.y, base.theta, map_frame.c_str(),
+           std::sqrt(std::max(0.0, base_cov(0, 0))), std::sqrt(std::max(0.0, base_cov(1, 1))),
+           std::sqrt(std::max(0.0, base_cov(2, 2))));
+}
+
+bool PlanarPoseFilterNodelet::onGlobalLocalization(std_srvs::Empty::Request&,
+                                                   std_srvs::Empty::Response&) {
+  std::lock_guard<std::mutex> lock(mutex());
+  ++global_requests_;
+  pending_seed_.reset();
+  if (backend_) {
+    backend_->globalLocalisation();
+    clearPath();
+  } else {
+    pending_global_ = true;
+  }
+  ROS_INFO("%s: global localisation: hypotheses spread over the map", getName().c_str());
+  return true;
+}
+
+void PlanarPoseFilterNodelet::feedOdometry(const ros::Time& stamp) {
+  const PoseNodeConfig& frames = poseNodeConfig();
+  tf2::Transform odom;
+  try {
+    tf2::fromMsg(tfBuffer().lookupTransform(frames.odom_frame, frames.base_frame, stamp).transform,
+                 odom);
+  } catch (const tf2::TransformException& error) {
+    ++odometry_missing_;
+    ROS_WARN_THROTTLE(
+        kWarnPeriodS, "%s: no %s -> %s at the time of the events, processed without odometry: %s",
+        getName().c_str(), frames.odom_frame.c_str(), frames.base_frame.c_str(), error.what());
+    last_odom_.reset();
+    return;
+  }
+  if (last_odom_) {
+    // base_link's motion in its own frame, then the sensor's: mount^-1 (+) delta (+) mount.
+    const tf2::Transform d = last_odom_->inverse() * odom;
+    const tf2::Matrix3x3& r = d.getBasis();
+    const ebslam::Pose2 base_delta{d.getOrigin().x(), d.getOrigin().y(),
+                                   std::atan2(r[1][0], r[0][0])};
+    backend_->applyOdometry(
+        ebslam::compose(ebslam::compose(ebslam::inverse(*mount_), base_delta), *mount_));
+  }
+  last_odom_ = odom;
+}
+
+bool PlanarPoseFilterNodelet::diagnoseTracking(
+    diagnostic_updater::DiagnosticStatusWrapper& status) const {
+  if (!backend_ || !backend_->localisesOnMap()) return false;
+  status.add("tracking state", ebslam::toString(backend_->trackingState()));
+  status.add("kidnaps detected", backend_->recoveries());
+  status.add("global searches converged", backend_->convergences());
+  status.add("initial poses accepted", initial_poses_);
+  status.add("initial poses rejected", rejected_initial_poses_);
+  status.add("global localisation requests", global_requests_);
+  status.add("odometry", use_odometry_ ? "on" : "off");
+  if (use_odometry_) status.add("batches without odometry tf", odometry_missing_);
+  if (backend_->trackingState() == ebslam::TrackingState::kGlobalSearch) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "global search (%d hypotheses): the pose is not yet known",
+                    backend_->particles().size());
+    return true;
+  }
+  return false;
 }
 
 bool PlanarPoseFilterNodelet::checkInput(const ebslam_msgs::EventArray& msg,
@@ -151,6 +340,8 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
     noteRestart(segment.jump_back_us, "event", "at the initial pose");
     backend_.reset();
     start_pose_ = config_.initial_pose;
+    pending_seed_.reset();
+    pending_global_ = map_localisation_ && config_.initial_pose_unknown;
     if (denoiser_) denoiser_->reset();
   }
   if (denoiser_) {
@@ -168,6 +359,7 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
   const std::size_t chunk = static_cast<std::size_t>(config_.max_events_per_update);
   for (std::size_t i = 0; i < segment.events.size(); i += chunk) {
     const std::size_t n = std::min(chunk, segment.events.size() - i);
+    if (use_odometry_) feedOdometry(ebslam_msgs::toRosTime(segment.events[i + n - 1].t_us));
     try {
       backend_->process(segment.events.data() + i, n);
     } catch (const std::invalid_argument& error) {
@@ -200,13 +392,15 @@ void PlanarPoseFilterNodelet::publish(const ros::Time& stamp) {
     cyt += w * dy * dt;
     ctt += w * dt * dt;
   }
+  const PoseFilterBackend::CovarianceModel model = backend_->covarianceModel();
+  const double floor_m2 = model.floor_m * model.floor_m;
   geometry_msgs::PoseWithCovariance::_covariance_type c{};
-  c[0] = cxx;
-  c[1] = c[6] = cxy;
-  c[7] = cyy;
-  c[5] = c[30] = cxt;
-  c[11] = c[31] = cyt;
-  c[35] = ctt;
+  c[0] = model.scale * cxx + floor_m2;
+  c[1] = c[6] = model.scale * cxy;
+  c[7] = model.scale * cyy + floor_m2;
+  c[5] = c[30] = model.scale * cxt;
+  c[11] = c[31] = model.scale * cyt;
+  c[35] = model.scale * ctt + model.floor_rad * model.floor_rad;
   publishPose(stamp, toPoseMsg(base), c, [&] {
     std::vector<geometry_msgs::Pose> poses;
     poses.reserve(static_cast<std::size_t>(particles.size()));
@@ -232,6 +426,8 @@ bool PlanarPoseFilterNodelet::onReset(ebslam_msgs::ResetPose::Request& request,
   } else {
     start_pose_ = config_.initial_pose;
   }
+  pending_seed_.reset();
+  pending_global_ = map_localisation_ && !request.use_pose && config_.initial_pose_unknown;
   backend_.reset();  // restarts with the next events
   clearPath();
   guard_->restart();

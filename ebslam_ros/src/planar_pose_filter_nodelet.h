@@ -3,17 +3,25 @@
 // an upward-looking eDVS (its optical axis within 10 degrees of base_link's z) whose events
 // (ebslam_msgs/EventArray) drive a core filter with planar particles; the optional denoiser, the
 // `reset` service (ebslam_msgs/ResetPose) and the filter knobs (EventFilterKnobs.cfg). The core
-// estimates the planar pose of the sensor's optical frame (z up to the ceiling).
+// estimates the planar pose of the sensor's optical frame (z up to the ceiling). A backend that
+// localises on a known map (EB-PF) also takes AMCL's interface: `initialpose`
+// (geometry_msgs/PoseWithCovarianceStamped, rviz's "2D Pose Estimate"), the `global_localization`
+// service (std_srvs/Empty) and odom -> base_link from tf as motion prior (~use_odometry).
 
 #include <ebslam_msgs/EventArray.h>
 #include <ebslam_msgs/ResetPose.h>
 #include <ebslam_ros_common/runtime_knobs.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <std_srvs/Empty.h>
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <ebslam/events/event_denoiser.h>
 #include <ebslam/events/pose.h>
 #include <ebslam/slam/event_filter.h>
 #include <ebslam/slam/particle_set2d.h>
+#include <ebslam/slam/tracking_state.h>
+
+#include <Eigen/Core>
 
 #include <cstdint>
 #include <functional>
@@ -40,6 +48,25 @@ class PoseFilterBackend {
   virtual void setFilterConfig(const ebslam::EventFilterConfig& config) = 0;
   virtual double g0() const = 0;
   virtual std::uint64_t processedEvents() const = 0;
+
+  // Localisation on a known map (EB-PF); the defaults are those of a filter without one.
+  /// Whether reseed / globalLocalisation / applyOdometry work.
+  virtual bool localisesOnMap() const { return false; }
+  /// Re-seeds around the sensor's pose with the covariance of (x, y, theta) [m^2, rad^2]; throws
+  /// std::invalid_argument for a bad pose or covariance.
+  virtual void reseed(const ebslam::Pose2& /*sensor*/, const Eigen::Matrix3d& /*covariance*/) {}
+  virtual void globalLocalisation() {}
+  /// The sensor's motion in its own frame since the last call.
+  virtual void applyOdometry(const ebslam::Pose2& /*sensor_delta*/) {}
+  virtual ebslam::TrackingState trackingState() const { return ebslam::TrackingState::kTracking; }
+  virtual std::uint64_t recoveries() const { return 0; }
+  virtual std::uint64_t convergences() const { return 0; }
+  /// Published covariance = scale * the particles' covariance + diag(floor_m^2, floor_m^2,
+  /// floor_rad^2) (EbpfLocalisationConfig::covariance_*).
+  struct CovarianceModel {
+    double scale = 1.0, floor_m = 0.0, floor_rad = 0.0;
+  };
+  virtual CovarianceModel covarianceModel() const { return {}; }
 };
 
 /// Planar part of base_link -> sensor; throws std::invalid_argument unless the sensor's optical
@@ -58,6 +85,13 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
   /// Subscribes `events`; advertises pose, path, particles, the `reset` service,
   /// dynamic_reconfigure and diagnostics. Call from onInit().
   void startFilter(PoseFilterNodeConfig config, ebslam::EventFilterConfig knobs, Factory factory);
+  /// Call before startFilter for a backend that localisesOnMap(): subscribes `initialpose`,
+  /// advertises `global_localization` and, with use_odometry, takes odom -> base_link from tf
+  /// as the motion between event batches.
+  void enableMapLocalisation(bool use_odometry) {
+    map_localisation_ = true;
+    use_odometry_ = use_odometry;
+  }
   /// Runs after every filter update (mutex held), before its pose is published: the SLAM
   /// nodelet publishes its map from here.
   virtual void afterUpdate(const PoseFilterBackend& /*filter*/, const ros::Time& /*stamp*/) {}
@@ -73,6 +107,13 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
   bool onReset(ebslam_msgs::ResetPose::Request& request,
                ebslam_msgs::ResetPose::Response& response);
   void onReconfigure(EventFilterKnobsConfig& knobs, std::uint32_t level);
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  bool onGlobalLocalization(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  /// Applies a pending initial pose or global localisation to a (new) backend.
+  void applyPendingSeed();
+  /// Feeds odom -> base_link's motion up to `stamp` to the backend (~use_odometry).
+  void feedOdometry(const ros::Time& stamp);
+  bool diagnoseTracking(diagnostic_updater::DiagnosticStatusWrapper& status) const override;
   /// Mounting from parameters or tf; false (and a throttled warning) while tf lacks it.
   bool resolveMount();
   void restart(const ebslam::Pose2& base_pose);
@@ -102,6 +143,20 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
 
   ros::Subscriber events_sub_;
   ros::ServiceServer reset_srv_;
+  // Map localisation (EB-PF): rviz's initial pose, AMCL's global localisation, odometry.
+  bool map_localisation_ = false;
+  bool use_odometry_ = false;
+  ros::Subscriber initial_pose_sub_;
+  ros::ServiceServer global_srv_;
+  struct Seed {
+    ebslam::Pose2 sensor;
+    Eigen::Matrix3d covariance;
+  };
+  std::optional<Seed> pending_seed_;  // for the next (re)created backend
+  bool pending_global_ = false;
+  std::optional<tf2::Transform> last_odom_;  // odom -> base_link at the last batch
+  std::uint64_t initial_poses_ = 0, rejected_initial_poses_ = 0, global_requests_ = 0,
+                odometry_missing_ = 0;
   std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EventFilterKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
 

@@ -37,6 +37,7 @@ void PoseFilterNodeletBase::startOutputs(const PoseNodeConfig& config, std::uint
   pose_pub_ = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", pose_queue);
   path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
   particles_pub_ = nh.advertise<geometry_msgs::PoseArray>("particles", 1);
+  particlecloud_pub_ = nh.advertise<geometry_msgs::PoseArray>("particlecloud", 1);
 }
 
 void PoseFilterNodeletBase::startDiagnostics() {
@@ -168,11 +169,12 @@ void PoseFilterNodeletBase::publishPose(
     path_pub_.publish(path);
     last_path_publication_ = now;
   }
-  if (particles_pub_.getNumSubscribers() > 0) {
+  if (particles_pub_.getNumSubscribers() > 0 || particlecloud_pub_.getNumSubscribers() > 0) {
     geometry_msgs::PoseArray array;
     array.header = pose.header;
     array.poses = particles();
-    particles_pub_.publish(array);
+    if (particles_pub_.getNumSubscribers() > 0) particles_pub_.publish(array);
+    if (particlecloud_pub_.getNumSubscribers() > 0) particlecloud_pub_.publish(array);
   }
 }
 

@@ -84,7 +84,8 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
 
   /// Publishes base_link's pose in the map (covariance in geometry_msgs' x y z rx ry rz order),
   /// appends it to `path` (published at most every 0.1 s of wall time while subscribed) and,
-  /// while `particles` is subscribed, the poses `particles()` gives.
+  /// while `particles` or `particlecloud` (AMCL's name) is subscribed, the poses `particles()`
+  /// gives.
   void publishPose(const ros::Time& stamp, const geometry_msgs::Pose& base,
                    const geometry_msgs::PoseWithCovariance::_covariance_type& covariance,
                    const std::function<std::vector<geometry_msgs::Pose>()>& particles);
@@ -108,6 +109,9 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
   /// The filter's own values, after the common ones.
   virtual void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper&) const {}
 
+  /// The tf buffer of startOutputs (odom -> base_link, frames of incoming poses).
+  tf2_ros::Buffer& tfBuffer() { return *tf_buffer_; }
+  const PoseNodeConfig& poseNodeConfig() const { return *config_; }
   std::mutex& mutex() { return mutex_; }
   InputCounters& counters() { return counters_; }
   void addProcessingTime(double seconds) { processing_s_ += seconds; }
@@ -130,7 +134,8 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
-  ros::Publisher pose_pub_, path_pub_, particles_pub_;
+  // particlecloud: the particles under AMCL's name too (rviz configurations made for AMCL).
+  ros::Publisher pose_pub_, path_pub_, particles_pub_, particlecloud_pub_;
   std::deque<geometry_msgs::PoseStamped> path_;
   ros::WallTime last_path_publication_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;

@@ -16,8 +16,17 @@ using ebslam_ros_common::param;
 PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
   PoseFilterNodeConfig config;
   config.sensor = loadCeilingSensorConfig(nh);
-  const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
-  config.initial_pose = {start[0], start[1], start[2]};
+  std::string start_text;
+  if (nh.getParam("initial_pose", start_text)) {
+    ebslam_ros_common::markParamRead(nh, "initial_pose");
+    if (start_text != "unknown") {
+      fail(nh, "initial_pose", "must be [x, y, theta] or \"unknown\" (not '" + start_text + "')");
+    }
+    config.initial_pose_unknown = true;
+  } else {
+    const std::array<double, 3> start = triple(nh, "initial_pose", {0.0, 0.0, 0.0});
+    config.initial_pose = {start[0], start[1], start[2]};
+  }
   loadPoseNodeConfig(nh, config);
   config.denoise = param<bool>(nh, "denoise", config.denoise);
   config.denoiser = loadBackgroundActivityFilterConfig(ros::NodeHandle(nh, "denoiser"));

@@ -18,6 +18,8 @@ namespace ebslam_ros {
 struct PoseFilterNodeConfig : PoseNodeConfig {
   CeilingSensorConfig sensor;
   ebslam::Pose2 initial_pose;  ///< ~initial_pose: base_link in map [m, m, rad]
+  /// ~initial_pose: "unknown": global localisation from the start (filters on a known map).
+  bool initial_pose_unknown = false;
   /// ~denoise: run the background-activity filter on the events before the pose filter (no
   /// topic hop); its parameters under ~denoiser/ (loadBackgroundActivityFilterConfig).
   bool denoise = false;

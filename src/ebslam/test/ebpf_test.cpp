@@ -111,6 +111,165 @@ TEST_F(EbpfOnSyntheticCeiling, RecoversFromOffsetStart) {
   EXPECT_LT(std::abs(angleDiff(e.theta, truth.theta)), 0.02);
 }
 
+// Global localisation: hypotheses over the whole 4 m x 4 m ceiling, no start pose; the search
+// converges (state back to tracking, N back to the tracking count) on the true pose.
+TEST_F(EbpfOnSyntheticCeiling, GlobalLocalisationFindsThePoseWithoutAStart) {
+  EbpfConfig config;
+  config.filter.g0 = 100.0;
+  config.localisation.max_particles = 20000;
+  // 2 s of events: a larger share of them is scored than the real-time default.
+  config.localisation.search_updates_per_event = 5000.0;
+  EventParticleFilter filter(config, camera_, likelihood(), Pose2{1.5, -1.5, 2.0});
+  filter.globalLocalisation();
+  EXPECT_EQ(filter.state(), TrackingState::kGlobalSearch);
+  EXPECT_EQ(filter.particles().size(), 20000);
+  EXPECT_GT(filter.knownCells(), 3000u);  // most of the 4 m x 4 m in 5 cm cells
+  // Spread over the map: the particles' position spread is about that of a uniform 4 m square.
+  const Eigen::Matrix3d spread = filter.particles().covariance();
+  EXPECT_GT(spread(0, 0), 0.8);
+  EXPECT_GT(spread(1, 1), 0.8);
+  filter.process(events_);
+  EXPECT_EQ(filter.state(), TrackingState::kTracking);
+  EXPECT_EQ(filter.convergences(), 1u);
+  EXPECT_EQ(filter.particles().size(), config.filter.num_particles);
+  const Pose2 truth = ground_truth_.back().second;
+  const Pose2 e = filter.estimate();
+  EXPECT_LT(std::hypot(e.x - truth.x, e.y - truth.y), 0.03);
+  EXPECT_LT(std::abs(angleDiff(e.theta, truth.theta)), 0.05);
+  EXPECT_EQ(filter.processedEvents(), events_.size());
+}
+
+// Kidnapping: tracked along the loop, then the events come from a path 1.3 m away; the
+// detector fires and the search finds the new pose.
+TEST_F(EbpfOnSyntheticCeiling, KidnapIsDetectedAndRecovered) {
+  const auto moved = [](double t) {
+    Pose2 p = testing::loopPath(t - 2.0);
+    return Pose2{p.x - 1.1, p.y - 0.7, p.theta + 1.0};
+  };
+  std::vector<std::pair<double, Pose2>> truth2;
+  const EventVector after =
+      testing::generateSyntheticEvents(ceiling_, camera_, moved, 2.0, 4.0, 0.15, &truth2);
+  EbpfConfig config;
+  config.filter.g0 = 100.0;
+  config.localisation.max_particles = 20000;
+  config.localisation.recovery_alpha_slow = 2e-5;
+  config.localisation.recovery_alpha_fast = 2e-3;
+  config.localisation.search_updates_per_event = 5000.0;
+  EventParticleFilter filter(config, camera_, likelihood(), testing::loopPath(0.0));
+  filter.process(events_);
+  EXPECT_EQ(filter.recoveries(), 0u) << "no false alarm while tracking";
+  filter.process(after);
+  EXPECT_EQ(filter.recoveries(), 1u);
+  EXPECT_EQ(filter.state(), TrackingState::kTracking);
+  const Pose2 truth = truth2.back().second;
+  const Pose2 e = filter.estimate();
+  EXPECT_LT(std::hypot(e.x - truth.x, e.y - truth.y), 0.03);
+  EXPECT_LT(std::abs(angleDiff(e.theta, truth.theta)), 0.05);
+}
+
+// The kidnap detector processes the events in chunks of whole batches: while it does not fire,
+// the filter is the same as without it (same particles, same estimate).
+TEST_F(EbpfOnSyntheticCeiling, DetectorLeavesTrackingUnchanged) {
+  EbpfConfig plain;
+  plain.filter.g0 = 100.0;
+  EbpfConfig detecting = plain;
+  detecting.localisation.recovery_alpha_slow = 2e-5;
+  detecting.localisation.recovery_alpha_fast = 2e-3;
+  EventParticleFilter a(plain, camera_, likelihood(), testing::loopPath(0.0));
+  EventParticleFilter b(detecting, camera_, likelihood(), testing::loopPath(0.0));
+  for (std::size_t i = 0; i < events_.size(); i += 1000) {
+    const std::size_t n = std::min<std::size_t>(1000, events_.size() - i);
+    a.process(events_.data() + i, n);
+    b.process(events_.data() + i, n);
+  }
+  ASSERT_EQ(b.recoveries(), 0u);
+  for (int i = 0; i < a.particles().size(); ++i) {
+    EXPECT_EQ(a.particles().particle(i).x, b.particles().particle(i).x);
+    EXPECT_EQ(a.particles().particle(i).theta, b.particles().particle(i).theta);
+  }
+  EXPECT_EQ(a.estimate().x, b.estimate().x);
+}
+
+TEST(Ebpf, ReseedDrawsAroundTheGivenPose) {
+  const CeilingCamera camera(CameraModel{}, 2.59);
+  cv::Mat edges(100, 100, CV_8UC1, cv::Scalar(0));
+  edges.row(50).setTo(255);
+  EbpfConfig config;
+  config.filter.num_particles = 2000;
+  EventParticleFilter filter(config, camera,
+                             makeEdgeLikelihoodMap(edges, 0.05, {-2.5, -2.5}, 0.015), Pose2{});
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  cov(0, 0) = 0.04;  // 0.2 m
+  cov(1, 1) = 0.01;  // 0.1 m
+  cov(2, 2) = 0.0;   // heading exact (rviz may send zeros)
+  filter.reseed({1.0, -0.5, 3.0}, cov);
+  EXPECT_EQ(filter.particles().size(), 2000);
+  const Pose2 mean = filter.particles().weightedMean();
+  EXPECT_NEAR(mean.x, 1.0, 0.02);
+  EXPECT_NEAR(mean.y, -0.5, 0.01);
+  EXPECT_NEAR(mean.theta, 3.0, 1e-6);
+  const Eigen::Matrix3d spread = filter.particles().covariance();
+  EXPECT_NEAR(spread(0, 0), 0.04, 0.006);
+  EXPECT_NEAR(spread(1, 1), 0.01, 0.0015);
+  // Bad covariances are rejected and change nothing.
+  Eigen::Matrix3d bad = cov;
+  bad(0, 0) = -1.0;
+  EXPECT_THROW(filter.reseed({0, 0, 0}, bad), std::invalid_argument);
+  bad = cov;
+  bad(0, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(filter.reseed({0, 0, 0}, bad), std::invalid_argument);
+  EXPECT_THROW(filter.reseed({std::numeric_limits<double>::infinity(), 0, 0}, cov),
+               std::invalid_argument);
+  EXPECT_NEAR(filter.particles().weightedMean().x, 1.0, 0.02);
+}
+
+TEST(Ebpf, OdometryMovesEveryParticleInItsOwnFrame) {
+  ParticleSet2D set;
+  set.reset(200, {1.0, 2.0, 0.5}, 0.1, 0.3, 1.0, 7);
+  std::vector<Pose2> before;
+  for (int i = 0; i < set.size(); ++i) before.push_back(set.particle(i));
+  const Pose2 delta{0.3, 0.1, 0.2};
+  set.applyOdometry(delta, 0.0, 0.0, 0.0, 0.0);  // noise-free: an exact SE(2) composition
+  for (int i = 0; i < set.size(); ++i) {
+    const Pose2 expected = compose(before[static_cast<std::size_t>(i)], delta);
+    EXPECT_NEAR(set.particle(i).x, expected.x, 1e-5);
+    EXPECT_NEAR(set.particle(i).y, expected.y, 1e-5);
+    EXPECT_NEAR(angleDiff(set.particle(i).theta, expected.theta), 0.0, 1e-5);
+  }
+  // With noise the spread grows with the motion (alpha3: 10 % of the distance).
+  ParticleSet2D noisy;
+  noisy.reset(4000, {0.0, 0.0, 0.0}, 0.0, 0.0, 1.0, 7);
+  noisy.applyOdometry({1.0, 0.0, 0.0}, 0.0, 0.0, 0.01, 0.0);
+  const Eigen::Matrix3d c = noisy.covariance();
+  EXPECT_NEAR(std::sqrt(c(0, 0)), 0.1, 0.01);
+  EXPECT_NEAR(noisy.weightedMean().x, 1.0, 0.01);
+  // Backwards: a reverse drive, not a half turn.
+  ParticleSet2D back;
+  back.reset(10, {0.0, 0.0, 0.0}, 0.0, 0.0, 1.0, 7);
+  back.applyOdometry({-0.5, 0.0, 0.0}, 0.0, 0.0, 0.0, 0.0);
+  EXPECT_NEAR(back.particle(0).x, -0.5, 1e-6);
+  EXPECT_NEAR(back.particle(0).theta, 0.0, 1e-6);
+}
+
+TEST(Ebpf, KldParticleCountFollowsTheChiSquareBound) {
+  // n = chi2_{k-1, 1-delta} / (2 eps) (Fox 2003): chi2_{99, 0.99} = 134.64 -> 1346.
+  EXPECT_NEAR(kldParticleCount(100, 0.05, 0.99), 1346, 3);
+  EXPECT_EQ(kldParticleCount(1, 0.05, 0.99), 1);
+  EXPECT_LT(kldParticleCount(10, 0.05, 0.99), kldParticleCount(1000, 0.05, 0.99));
+  EbpfConfig bad;
+  bad.localisation.kld_err = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = EbpfConfig{};
+  bad.localisation.max_particles = bad.localisation.min_particles - 1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = EbpfConfig{};
+  bad.localisation.recovery_alpha_slow = 0.1;  // fast missing
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = EbpfConfig{};
+  bad.localisation.search_sigmas_m = {0.1, 0.05};
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(Ebpf, BadInputIsRejectedWithoutSideEffects) {
   const CeilingCamera camera(CameraModel{}, 2.59);
   cv::Mat edges(100, 100, CV_8UC1, cv::Scalar(0));

@@ -34,6 +34,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "ceiling_simulation.h"
 #include "ebslam/events/event_denoiser.h"
 #include "ebslam/events/event_io.h"
 #include "ebslam/events/trajectory.h"
@@ -49,96 +50,12 @@ using namespace ebslam;
 
 namespace {
 
-struct Simulated {
-  EventVector events;
-  std::vector<std::uint8_t> noise_labels;  // 1 = background noise; empty if not known
-  Trajectory ground_truth;
-  CeilingMap map;
-};
+using tools::Simulated;
 
 Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duration_s,
                       std::uint64_t seed, double noise_rate_hz) {
-  Simulated s;
-  const fs::path events_path = dir / "events.ebe";
-  const fs::path labels_path = dir / "noise_labels.bin";
-  const fs::path gt_path = dir / "ground_truth.tum";
-  const fs::path edges_path = dir / "ceiling_edges.png";
-  const fs::path meta_path = dir / "ceiling_map.txt";
-  SimulatorConfig sim;
-  sim.events.seed = seed;
-  sim.events.noise_rate_hz_per_pixel = noise_rate_hz;
-  if (fs::exists(events_path) && fs::exists(gt_path) && fs::exists(edges_path) &&
-      fs::exists(meta_path)) {
-    s.events = readEventFile(events_path.string()).events;
-    if (fs::exists(labels_path)) {
-      std::ifstream in(labels_path, std::ios::binary);
-      s.noise_labels.resize(s.events.size());
-      in.read(reinterpret_cast<char*>(s.noise_labels.data()),
-              static_cast<std::streamsize>(s.noise_labels.size()));
-      if (!in) s.noise_labels.clear();
-    }
-    s.ground_truth = readTumTrajectory(gt_path.string());
-    s.map.edges = cv::imread(edges_path.string(), cv::IMREAD_GRAYSCALE);
-    std::ifstream meta(meta_path);
-    meta >> s.map.metres_per_pixel >> s.map.origin_m.x() >> s.map.origin_m.y();
-    return s;
-  }
-  fs::create_directories(dir);
-  const Trajectory floor = makeFloorRobotTrajectory(readTumTrajectory(mocap.string()));
-  const double t0 = floor.front().t_s;
-  const double t1 =
-      duration_s > 0.0 ? std::min(floor.back().t_s, t0 + duration_s) : floor.back().t_s;
-  Trajectory used;
-  for (const StampedPose& p : floor) {
-    if (p.t_s <= t1 + 0.1) used.push_back(p);
-  }
-  const FloorRegion region = visibleCeilingRegion(used, sim.camera);
-  LinesAndCirclesConfig texture_config;  // thesis 6.5.3: random lines and circles
-  texture_config.seed = seed;
-  const double metres_per_texel = 0.01;
-  texture_config.width_px = static_cast<int>((region.max.x() - region.min.x()) / 0.01) + 1;
-  texture_config.height_px = static_cast<int>((region.max.y() - region.min.y()) / 0.01) + 1;
-  // Keep the density of the default texture (40 lines, 25 circles per 10.24 m x 10.24 m).
-  const double area_factor =
-      (texture_config.width_px * texture_config.height_px) / (1024.0 * 1024.0);
-  texture_config.line_count = static_cast<int>(std::lround(40 * area_factor));
-  texture_config.circle_count = static_cast<int>(std::lround(25 * area_factor));
-  const cv::Mat texture = makeLinesAndCirclesTexture(texture_config);
-  const Scene scene = makeCeilingScene(texture, region, metres_per_texel);
-  const EventSimulator simulator(sim);
-  SimulationResult result = simulator.simulate(scene, used, t0, t1);
-  s.events = std::move(result.events);
-  s.noise_labels = std::move(result.noise_labels);
-  s.ground_truth = std::move(result.ground_truth);
-  // Known ceiling map for EB-PF as in fig. 6.8: Canny edges of the ceiling image (here the
-  // texture itself, blurred to about half a sensor pixel on the ceiling like CeilingMapConfig).
-  // Canny puts an edge on one of the two pixels straddling it, a bias of up to half a pixel; at
-  // twice the texture resolution that bias is 2.5 mm. Pixel (col, row) of the edge image covers
-  // region.min + [col, col + 1) * metres_per_texel / 2 (cv::resize keeps pixel centres).
-  cv::Mat texture8, upsampled, blurred;
-  texture.convertTo(texture8, CV_8U, 255.0);
-  cv::resize(texture8, upsampled, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
-  const double edge_pixel_m = 0.5 * metres_per_texel;
-  cv::GaussianBlur(upsampled, blurred, cv::Size(), 0.015 / edge_pixel_m);
-  cv::Canny(blurred, s.map.edges, 20, 50);
-  s.map.intensity = texture;
-  s.map.metres_per_pixel = edge_pixel_m;
-  s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * edge_pixel_m);
-  writeEventFile(events_path.string(), s.events, SensorSize{128, 128});
-  {
-    std::ofstream out(labels_path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(s.noise_labels.data()),
-              static_cast<std::streamsize>(s.noise_labels.size()));
-  }
-  writeTumTrajectory(gt_path.string(), s.ground_truth);
-  cv::imwrite(edges_path.string(), s.map.edges);
-  cv::Mat intensity8;
-  s.map.intensity.convertTo(intensity8, CV_8U, 255.0);
-  cv::imwrite((dir / "ceiling.png").string(), intensity8);
-  std::ofstream meta(meta_path);
-  meta.precision(12);
-  meta << s.map.metres_per_pixel << ' ' << s.map.origin_m.x() << ' ' << s.map.origin_m.y() << '\n';
-  return s;
+  return tools::simulateFloorRun(makeFloorRobotTrajectory(readTumTrajectory(mocap.string())), dir,
+                                 duration_s, seed, noise_rate_hz);
 }
 
 // Position / rotation RMSE of an EB-PF run in the map (= world) frame, no alignment; the

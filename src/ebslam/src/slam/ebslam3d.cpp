@@ -558,6 +558,8 @@ void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
         above_recover_s_ = 0.0;
       }
       break;
+    case TrackingState::kGlobalSearch:  // EB-PF's state; EB-SLAM-3D never enters it
+      break;
   }
 }
 

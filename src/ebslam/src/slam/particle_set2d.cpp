@@ -104,6 +104,7 @@ void ParticleSet2D::step(const std::uint32_t* pixel_index, int batch, const floa
       for (std::size_t i = 0; i < n; ++i) sum[i] += data[cell[i]];
     }
   }
+  last_batch_ = batch;
   // Score update with the decay applied to the global scale (eq. 6.29/6.30).
   const double factor = scores_.beginUpdate(decay);
   std::vector<double>& stored = scores_.stored();
@@ -111,22 +112,28 @@ void ParticleSet2D::step(const std::uint32_t* pixel_index, int batch, const floa
 }
 
 bool ParticleSet2D::resampleSystematic(bool reset_scores) {
+  return resampleSystematic(reset_scores, size());
+}
+
+bool ParticleSet2D::resampleSystematic(bool reset_scores, int count) {
+  if (count < 1) throw std::invalid_argument("ParticleSet2D: need at least one particle");
   const std::vector<double>& w = scores_.stored();
   const std::size_t n = w.size();
+  const auto m = static_cast<std::size_t>(count);
   double total = 0.0;
   for (double v : w) total += v;
   if (!(total > 0.0) || !std::isfinite(total)) return false;
 
-  scratch_x_.resize(n);
-  scratch_y_.resize(n);
-  scratch_c_.resize(n);
-  scratch_s_.resize(n);
-  scratch_w_.resize(n);
-  const double step = total / static_cast<double>(n);
+  scratch_x_.resize(m);
+  scratch_y_.resize(m);
+  scratch_c_.resize(m);
+  scratch_s_.resize(m);
+  scratch_w_.resize(m);
+  const double step = total / static_cast<double>(m);
   double target = rng_.uniform() * step;
   double cumulative = w[0];
   std::size_t k = 0;
-  for (std::size_t j = 0; j < n; ++j) {
+  for (std::size_t j = 0; j < m; ++j) {
     while (cumulative <= target && k + 1 < n) cumulative += w[++k];
     // Renormalise the heading vector here, once per resampling, against rounding drift.
     const float inv_norm = 1.0f / std::sqrt(cos_[k] * cos_[k] + sin_[k] * sin_[k]);
@@ -143,12 +150,106 @@ bool ParticleSet2D::resampleSystematic(bool reset_scores) {
   sin_.swap(scratch_s_);
   std::vector<double>& stored = scores_.stored();
   if (reset_scores) {
+    stored.resize(m);
     std::fill(stored.begin(), stored.end(), step);
   } else {
     stored.swap(scratch_w_);
   }
   scores_.renormalise();
+  if (m != n) resizeWorkspace(m);
   return true;
+}
+
+void ParticleSet2D::resizeWorkspace(std::size_t count) {
+  cell_.resize(count);
+  sum_.resize(count);
+  noise_x_.resize(count);
+  noise_y_.resize(count);
+  noise_theta_.resize(count);
+}
+
+void ParticleSet2D::assign(const std::vector<Pose2>& poses, double score) {
+  if (poses.empty()) throw std::invalid_argument("ParticleSet2D: need at least one particle");
+  x_.clear();
+  y_.clear();
+  cos_.clear();
+  sin_.clear();
+  scores_.assign(0, score);
+  append(poses, score);
+}
+
+void ParticleSet2D::append(const std::vector<Pose2>& poses, double score) {
+  scores_.renormalise();
+  for (const Pose2& p : poses) {
+    x_.push_back(static_cast<float>(p.x));
+    y_.push_back(static_cast<float>(p.y));
+    cos_.push_back(static_cast<float>(std::cos(p.theta)));
+    sin_.push_back(static_cast<float>(std::sin(p.theta)));
+    scores_.stored().push_back(score);
+  }
+  resizeWorkspace(x_.size());
+}
+
+double ParticleSet2D::meanScore() const {
+  if (x_.empty()) return 0.0;
+  double total = 0.0;
+  for (double v : scores_.stored()) total += v;
+  return scores_.scale() * total / static_cast<double>(x_.size());
+}
+
+void ParticleSet2D::applyOdometry(const Pose2& delta, double alpha1, double alpha2, double alpha3,
+                                  double alpha4) {
+  const double trans = std::hypot(delta.x, delta.y);
+  // Driving backwards is a forward motion with rot1 turned by pi: take the smaller rot1.
+  double rot1 = trans < 1e-3 ? 0.0 : std::atan2(delta.y, delta.x);
+  double sign = 1.0;
+  if (std::abs(rot1) > 0.5 * M_PI) {
+    rot1 = std::remainder(rot1 + M_PI, 2.0 * M_PI);
+    sign = -1.0;
+  }
+  const double rot2 = std::remainder(delta.theta - rot1, 2.0 * M_PI);
+  const double sd_rot1 = std::sqrt(alpha1 * rot1 * rot1 + alpha2 * trans * trans);
+  const double sd_trans = std::sqrt(alpha3 * trans * trans + alpha4 * (rot1 * rot1 + rot2 * rot2));
+  const double sd_rot2 = std::sqrt(alpha1 * rot2 * rot2 + alpha2 * trans * trans);
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    float g[4];
+    rng_.normals4(g);
+    const double r1 = rot1 + sd_rot1 * g[0];
+    const double t = sign * (trans + sd_trans * g[1]);
+    const double r2 = rot2 + sd_rot2 * g[2];
+    const double heading = std::atan2(sin_[i], cos_[i]);
+    const double h1 = heading + r1;
+    x_[i] += static_cast<float>(t * std::cos(h1));
+    y_[i] += static_cast<float>(t * std::sin(h1));
+    cos_[i] = static_cast<float>(std::cos(h1 + r2));
+    sin_[i] = static_cast<float>(std::sin(h1 + r2));
+  }
+}
+
+double ParticleSet2D::lastBatchMeanValue() const {
+  if (last_batch_ == 0 || x_.empty()) return 0.0;
+  double total = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i) total += sum_[i];
+  return total / (static_cast<double>(x_.size()) * last_batch_);
+}
+
+Eigen::Matrix3d ParticleSet2D::covariance() const {
+  double mx = 0.0, my = 0.0, c = 1.0, s = 0.0;
+  weightedMean(mx, my, c, s);
+  const double mean_theta = std::atan2(s, c);
+  const std::vector<double>& w = scores_.stored();
+  double total = 0.0;
+  for (double v : w) total += v;
+  const bool plain = !(total > 0.0) || !std::isfinite(total);
+  if (plain) total = static_cast<double>(x_.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double wi = plain ? 1.0 : w[i];
+    const Eigen::Vector3d d(x_[i] - mx, y_[i] - my,
+                            std::remainder(std::atan2(sin_[i], cos_[i]) - mean_theta, 2.0 * M_PI));
+    cov += wi * d * d.transpose();
+  }
+  return cov / total;
 }
 
 void ParticleSet2D::weightedMean(double& x, double& y, double& cos_theta, double& sin_theta) const {

@@ -10,6 +10,8 @@ const char* toString(TrackingState state) {
       return "lost";
     case TrackingState::kRecovering:
       return "recovering";
+    case TrackingState::kGlobalSearch:
+      return "global_search";
   }
   return "unknown";
 }

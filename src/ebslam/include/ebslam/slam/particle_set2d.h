@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "ebslam/events/pose.h"
 #include "ebslam/slam/exponential_decay.h"
 #include "ebslam/slam/fast_normal_generator.h"
@@ -41,6 +43,34 @@ class ParticleSet2D {
   /// in which case all scores become the mean score. Returns false (and does nothing) when the
   /// total score is zero or not finite.
   bool resampleSystematic(bool reset_scores);
+  /// The same with `count` children instead of N (the particle count becomes `count`; KLD
+  /// sampling). Throws std::invalid_argument if count < 1.
+  bool resampleSystematic(bool reset_scores, int count);
+
+  /// Replaces the particles by `poses`, all with score `score` (> 0); the noise generator keeps
+  /// its state. Throws std::invalid_argument for an empty list.
+  void assign(const std::vector<Pose2>& poses, double score);
+  /// Appends `poses` with score `score` (mean-score scale of the current set).
+  void append(const std::vector<Pose2>& poses, double score);
+  /// Mean score of the particles (0 for an empty set).
+  double meanScore() const;
+
+  /// Odometry motion of every particle (sample_motion_model_odometry, Probabilistic Robotics
+  /// 5.4, AMCL's "diff" model): the motion `delta` given in the particle's own frame (forward
+  /// x, left y, turn theta) is split into rot1, trans, rot2, each disturbed by a zero-mean normal
+  /// of standard deviation sqrt(a1 rot1^2 + a2 trans^2) (rotations) and sqrt(a3 trans^2 +
+  /// a4 (rot1^2 + rot2^2)) (translation), then applied. A motion shorter than 1 mm turns in place
+  /// (rot1 = 0).
+  void applyOdometry(const Pose2& delta, double alpha1, double alpha2, double alpha3,
+                     double alpha4);
+
+  /// Mean over the particles of the mean map value per event of the last step() (how well the
+  /// set explains the last batch; 0 before the first step).
+  double lastBatchMeanValue() const;
+
+  /// Score-weighted covariance of (x [m], y [m], theta [rad]) around the weighted mean (heading
+  /// differences wrapped to (-pi, pi]).
+  Eigen::Matrix3d covariance() const;
 
   /// Score-weighted mean pose (heading as the angle of the weighted mean direction); the plain
   /// mean when all scores are zero.
@@ -58,6 +88,8 @@ class ParticleSet2D {
  private:
   // Pose state in float: 1 um resolution at 8 m is far below a sensor pixel (3 cm); the heading
   // unit vector is renormalised at every resampling.
+  void resizeWorkspace(std::size_t count);
+
   std::vector<float> x_, y_, cos_, sin_;
   DecayingScores scores_;
   FastNormalGenerator rng_{1};
@@ -66,6 +98,7 @@ class ParticleSet2D {
   std::vector<std::uint32_t> cell_;  // per particle: map cell of the current event
   std::vector<float> sum_;           // per particle: summed map values of the current batch
   std::vector<float> noise_x_, noise_y_, noise_theta_;  // per particle: this step's normals
+  int last_batch_ = 0;                                  // events of the last step()
 };
 
 }  // namespace ebslam

@@ -11,8 +11,10 @@ enum class TrackingState {
   kTracking,    ///< the events agree with the map at the estimate
   kLost,        ///< they have not for a while: the estimate is not to be trusted
   kRecovering,  ///< the fit came back but not yet for long enough (EB-SLAM-3D only)
+  /// hypotheses spread over the map, not yet converged (EB-PF's global localisation)
+  kGlobalSearch,
 };
-/// "tracking", "lost" or "recovering".
+/// "tracking", "lost", "recovering" or "global_search".
 const char* toString(TrackingState state);
 
 }  // namespace ebslam
