@@ -100,7 +100,8 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
   /// ~denoise: the background-activity filter between the guard and the pose filter.
   std::optional<ebslam::BackgroundActivityFilter> denoiser_;
 
-  ros::Subscriber events_sub_;
+  EventInputType input_type_ = EventInputType::kAuto;
+  EventSubscriber events_sub_;
   ros::ServiceServer reset_srv_;
   std::unique_ptr<dynamic_reconfigure::Server<EventFilterKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
