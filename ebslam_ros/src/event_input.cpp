@@ -156,10 +156,12 @@ void EventSubscriber::subscribe(const ros::NodeHandle& nh, const std::string& to
     requested_ = type;
     last_reported_type_.clear();
   }
-  // auto: EventArray until a publisher says otherwise.
-  subscribeAs(requested_ == EventInputType::kEventPacket ? EventInputType::kEventPacket
-                                                         : EventInputType::kDvs);
-  // Also with a fixed type: a publisher of another type is reported.
+  // auto: the publishers' type when the master knows one, else EventArray until a publisher
+  // says otherwise; a fixed type: that one (a publisher of another type is reported).
+  if (requested_ != EventInputType::kAuto) {
+    subscribeAs(requested_ == EventInputType::kEventPacket ? EventInputType::kEventPacket
+                                                           : EventInputType::kDvs);
+  }
   probe();
   probe_timer_ = nh_.createWallTimer(ros::WallDuration(kProbePeriodS),
                                      [this](const ros::WallTimerEvent&) { probe(); });
@@ -192,23 +194,38 @@ EventSubscriber::Counters EventSubscriber::counters() const {
 // Called from subscribe() and the probe timer only (never concurrently).
 void EventSubscriber::subscribeAs(EventInputType type) {
   if (subscribed() == type) return;
-  ros::Subscriber fresh;
-  if (type == EventInputType::kEventPacket) {
-    fresh = nh_.subscribe<ebslam_msgs::EventPacket>(topic_, queue_size_, &EventSubscriber::onPacket,
-                                                    this, hints_);
-  } else {
-    fresh = nh_.subscribe<ebslam_msgs::EventArray>(topic_, queue_size_, callback_,
-                                                   ros::VoidConstPtr(), hints_);
-  }
+  // The old subscription goes first: roscpp refuses two subscriptions of one topic with
+  // different MD5 sums in one process.
   ros::Subscriber old;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (type == EventInputType::kEventPacket) converter_.reset();
     old = subscriber_;
+    subscriber_ = ros::Subscriber();
+    subscribed_.reset();
+  }
+  old.shutdown();  // outside the lock: it waits for a callback in progress, which takes the lock
+  ros::Subscriber fresh;
+  try {
+    if (type == EventInputType::kEventPacket) {
+      fresh = nh_.subscribe<ebslam_msgs::EventPacket>(topic_, queue_size_,
+                                                      &EventSubscriber::onPacket, this, hints_);
+    } else {
+      fresh = nh_.subscribe<ebslam_msgs::EventArray>(topic_, queue_size_, callback_,
+                                                     ros::VoidConstPtr(), hints_);
+    }
+  } catch (const ros::Exception& error) {
+    // Another nodelet of this process still holds the topic with the other type (it switches
+    // too, at its next probe): try again at ours.
+    ROS_WARN("%s: cannot subscribe %s yet: %s", name_.c_str(), resolved_topic_.c_str(),
+             error.what());
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (type == EventInputType::kEventPacket) converter_.reset();
     subscriber_ = fresh;
     subscribed_ = type;
   }
-  old.shutdown();
   if (requested_ == EventInputType::kAuto) {
     ROS_INFO("%s: reading %s as %s", name_.c_str(), resolved_topic_.c_str(),
              type == EventInputType::kEventPacket ? "event_camera_msgs/EventPacket"
@@ -240,7 +257,12 @@ void EventSubscriber::probe() {
                 eventInputTypeName(requested_),
                 *type == EventInputType::kEventPacket ? "event_packet" : "dvs");
     }
-    return;
+    break;
+  }
+  // A subscription that failed (another nodelet held the topic with the other type) is retried.
+  if (!subscribed()) {
+    subscribeAs(requested_ == EventInputType::kEventPacket ? EventInputType::kEventPacket
+                                                           : EventInputType::kDvs);
   }
 }
 
