@@ -1,5 +1,5 @@
 // Round trips of event_conversions.h and the time convention's range errors.
-#include "ebslam_msgs/event_conversions.h"
+#include "ebslam_msgs/event_packet_conversions.h"
 
 #include <gtest/gtest.h>
 
@@ -84,6 +84,61 @@ TEST(EventConversions, SourceClockThroughMessagesRoundTrip) {
       ASSERT_EQ(received[i].polarity, events[i].polarity);
     }
   }
+}
+
+// EventPacket: events -> mono packet -> events is exact, across several packets of one stream.
+TEST(EventPacketConversions, MonoRoundTrip) {
+  ebslam_msgs::EventPacketConverter converter;
+  ebslam::EventVector all, back;
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    const ebslam::EventVector events =
+        randomEvents(std::int64_t{1700000000000000} + 100000 * k, 500, 5 + k);
+    all.insert(all.end(), events.begin(), events.end());
+    const ebslam_msgs::EventPacket msg =
+        ebslam_msgs::toMonoPacket(events, {346, 260}, "davis_optical_frame", k);
+    EXPECT_EQ(msg.header.stamp, ebslam_msgs::toRosTime(events.front().t_us));
+    const ebslam_msgs::EventPacketResult r = converter.append(msg, back);
+    EXPECT_FALSE(r.rejected);
+    EXPECT_EQ(r.sensor.width, 346u);
+    EXPECT_EQ(r.stats.dropped_bytes + r.stats.outside + r.bad_time, 0u);
+  }
+  EXPECT_EQ(back, all);
+}
+
+TEST(EventPacketConversions, PacketMessageRoundTripAndEventArray) {
+  const ebslam::EventVector events = randomEvents(1700000000000000, 50, 9);
+  const ebslam_msgs::EventPacket msg = ebslam_msgs::toMonoPacket(events, {640, 480}, "cam");
+  EXPECT_EQ(ebslam_msgs::toMsg(ebslam_msgs::toPacket(msg)), msg);
+  ebslam_msgs::EventPacketConverter converter;
+  ebslam_msgs::EventPacketResult r;
+  const ebslam_msgs::EventArray array = converter.toEventArray(msg, &r);
+  EXPECT_EQ(array.width, 640u);
+  EXPECT_EQ(array.height, 480u);
+  EXPECT_EQ(array.header.frame_id, "cam");
+  EXPECT_EQ(array.header.stamp, ebslam_msgs::toRosTime(events.back().t_us));
+  EXPECT_EQ(ebslam_msgs::fromMsg(array), events);
+}
+
+TEST(EventPacketConversions, BadPacketsAreRejectedWithAReason) {
+  ebslam_msgs::EventPacket msg =
+      ebslam_msgs::toMonoPacket(randomEvents(1700000000000000, 5, 1), {128, 128}, "cam");
+  ebslam_msgs::EventPacketConverter converter;
+  ebslam::EventVector out;
+  msg.encoding = "evt2";
+  EXPECT_TRUE(converter.append(msg, out).rejected);
+  msg.encoding = "mono";
+  msg.width = 0;
+  const ebslam_msgs::EventPacketResult r = converter.append(msg, out);
+  EXPECT_TRUE(r.rejected);
+  EXPECT_NE(r.error.find("sensor size"), std::string::npos);
+  msg.width = 128;
+  msg.events.resize(msg.events.size() - 3);  // a cut-off last event
+  const ebslam_msgs::EventPacketResult cut = converter.append(msg, out);
+  EXPECT_FALSE(cut.rejected);
+  EXPECT_EQ(cut.stats.dropped_bytes, 5u);
+  EXPECT_EQ(out.size(), 4u);
+  EXPECT_THROW(ebslam_msgs::toMonoPacket({{1, 200, 0, true}}, {128, 128}, "cam"),
+               std::invalid_argument);
 }
 
 }  // namespace

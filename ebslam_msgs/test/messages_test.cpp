@@ -5,6 +5,7 @@
 
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_msgs/EventArray.h>
+#include <ebslam_msgs/EventPacket.h>
 #include <ebslam_msgs/Segmentation.h>
 #include <ebslam_msgs/SuperpixelArray.h>
 #include <cmath>
@@ -50,6 +51,30 @@ TEST(Messages, Md5MatchesDvsMsgs) {
                "40d339b261445b8ce9a6fef01267cd5d");
   EXPECT_STREQ(ros::message_traits::md5sum<ebslam_msgs::EventArray>(),
                "5e8beee5a6c107e504c2e78903c224b8");
+}
+
+TEST(Messages, Md5MatchesPropheseeAndEventCameraMsgs) {
+  // prophesee_event_msgs/EventArray (prophesee_ros_driver) is field for field dvs_msgs': the
+  // same sums. event_camera_msgs/EventPacket (ROS 1 definition, libcaer_driver and
+  // metavision_driver); both sums computed with genmsg from the upstream .msg files.
+  EXPECT_STREQ(ros::message_traits::md5sum<ebslam_msgs::EventArray>(),
+               "5e8beee5a6c107e504c2e78903c224b8");
+  EXPECT_STREQ(ros::message_traits::md5sum<ebslam_msgs::EventPacket>(),
+               "8a6101b351a64529ac77bd8b71074e52");
+}
+
+TEST(Messages, EventPacketRoundTrip) {
+  ebslam_msgs::EventPacket in;
+  in.header = makeHeader("prophesee_optical_frame");
+  in.width = 1280;
+  in.height = 720;
+  in.seq = 59068;
+  in.time_base = 1702306974272224018ull;
+  in.encoding = "evt3";
+  in.events = {0x00, 0x80, 0x05, 0x60, 0xFF};
+  const auto out = roundTrip(in);
+  EXPECT_EQ(out, in);
+  EXPECT_EQ(out.time_base, 1702306974272224018ull);
 }
 
 TEST(Messages, EventArrayRoundTrip) {

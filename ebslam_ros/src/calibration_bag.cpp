@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -21,6 +22,7 @@
 #include "ebslam/events/event_clock.h"
 #include "ebslam_msgs/EventArray.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_msgs/event_packet_conversions.h"
 
 namespace ebslam_ros {
 namespace {
@@ -223,12 +225,14 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
     if (auto o = tracker.push(std::move(frame))) observations.push_back(*o);
     frame_motion.push_back(std::max(0, tracker.lastChangedPixels()));
   };
+  ebslam_msgs::EventPacketConverter event_packets;  // decoder state of the events topic
   for (const rosbag::MessageInstance& m : view) {
     if (m.getTopic() == topics.events) {
-      const auto msg = m.instantiate<ebslam_msgs::EventArray>();
-      if (!msg) continue;
       const std::size_t first = events.size();
-      sensor = ebslam_msgs::appendFromMsg(*msg, events);
+      const std::optional<ebslam::SensorSize> size =
+          ebslam_msgs::appendRecordedEvents(m, event_packets, events);
+      if (!size) continue;
+      sensor = *size;
       for (std::size_t i = first; i < events.size(); ++i) events[i].t_us -= origin_us;
     } else if (m.getTopic() == topics.camera_info) {
       if (const auto msg = m.instantiate<sensor_msgs::CameraInfo>()) info = *msg;

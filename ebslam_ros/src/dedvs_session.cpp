@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_msgs/event_packet_conversions.h"
 
 namespace ebslam_ros {
 
@@ -24,10 +25,10 @@ DedvsSession readDedvsSession(const std::string& bag_path, const DedvsSessionTop
   }
   DedvsSession session;
   rosbag::View view(bag, rosbag::TopicQuery({topics.events, topics.depth, topics.ground_truth}));
+  ebslam_msgs::EventPacketConverter event_packets;  // decoder state of the events topic
   for (const rosbag::MessageInstance& m : view) {
     if (m.getTopic() == topics.events) {
-      if (auto msg = m.instantiate<ebslam_msgs::EventArray>()) {
-        ebslam_msgs::appendFromMsg(*msg, session.events);
+      if (ebslam_msgs::appendRecordedEvents(m, event_packets, session.events)) {
         ++session.event_messages;
       }
     } else if (m.getTopic() == topics.depth) {

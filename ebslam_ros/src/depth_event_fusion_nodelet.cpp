@@ -59,6 +59,7 @@
 
 #include "depth_event_fusion_params.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/event_input.h"
 
 namespace ebslam_ros {
 
@@ -77,6 +78,7 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "depth event fusion " + getName(), [&] {
       config_ = loadDepthEventFusionNodeConfig(getPrivateNodeHandle());
+      input_type_ = readEventInputType(getPrivateNodeHandle());
       if (!config_.edvs_camera_info) fusion_.emplace(config_.sensors, config_.fusion);
     });
     ros::NodeHandle& nh = getNodeHandle();
@@ -95,8 +97,10 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
     depth_events_pub_ = nh.advertise<ebslam_msgs::DepthEventArray>("depth_events", 100);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("depth_events/cloud", 5);
     const auto queue = static_cast<std::uint32_t>(config_.queue_size);
-    events_sub_ = nh.subscribe("events", queue, &DepthEventFusionNodelet::onEvents, this,
-                               ros::TransportHints().tcpNoDelay());
+    events_sub_.subscribe(
+        nh, "events", queue, input_type_,
+        [this](const ebslam_msgs::EventArray::ConstPtr& msg) { onEvents(msg); },
+        ros::TransportHints().tcpNoDelay(), getName());
     depth_sub_ = nh.subscribe("depth_registered/image_raw", 5, &DepthEventFusionNodelet::onDepth,
                               this, ros::TransportHints().tcpNoDelay());
     depth_info_sub_ = nh.subscribe("depth_registered/camera_info", 5,
@@ -478,7 +482,8 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
   double latest_frame_s_ = -std::numeric_limits<double>::infinity();  // event clock [s]
   std::deque<double> frame_times_s_;  // the core's kept frames, event clock [s]
   ros::WallTime latest_frame_wall_;
-  ros::Subscriber events_sub_, depth_sub_, depth_info_sub_, edvs_info_sub_;
+  ros::Subscriber depth_sub_, depth_info_sub_, edvs_info_sub_;
+  EventInputType input_type_ = EventInputType::kAuto;
   ros::Publisher depth_events_pub_, cloud_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
@@ -492,6 +497,7 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
                 rejected_encoding_ = 0, rejected_size_ = 0, rejected_old_ = 0,
                 depth_info_mismatches_ = 0, rejected_sensor_ = 0, dropped_no_calibration_ = 0;
   std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
+  EventSubscriber events_sub_;  // last member: stopped before the state its callbacks use
 };
 
 }  // namespace ebslam_ros

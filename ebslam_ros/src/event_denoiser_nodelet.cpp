@@ -33,6 +33,7 @@
 
 #include "ebslam_msgs/event_conversions.h"
 #include "ebslam_ros/EventDenoiserKnobsConfig.h"
+#include "ebslam_ros/event_input.h"
 #include "event_denoiser_params.h"
 
 namespace ebslam_ros {
@@ -46,6 +47,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event denoiser " + getName(), [&] {
       config_ = loadEventDenoiserNodeConfig(getPrivateNodeHandle());
+      input_type_ = readEventInputType(getPrivateNodeHandle());
     });
     ros::NodeHandle& nh = getNodeHandle();
     reconfigure_ = std::make_unique<ebslam_ros_common::RuntimeKnobs<EventDenoiserKnobsConfig>>(
@@ -70,9 +72,10 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
           diagnostics_->update();
         });
     events_pub_ = nh.advertise<ebslam_msgs::EventArray>("events_denoised", 100);
-    events_sub_ =
-        nh.subscribe("events", static_cast<std::uint32_t>(config_.queue_size),
-                     &EventDenoiserNodelet::onEvents, this, ros::TransportHints().tcpNoDelay());
+    events_sub_.subscribe(
+        nh, "events", static_cast<std::uint32_t>(config_.queue_size), input_type_,
+        [this](const ebslam_msgs::EventArray::ConstPtr& msg) { onEvents(msg); },
+        ros::TransportHints().tcpNoDelay(), getName());
   }
 
   // ROS_*_THROTTLE runs on ROS time, which a looping bag sends back: throttle on wall time.
@@ -213,7 +216,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
   std::mutex mutex_;
   std::optional<ebslam::BackgroundActivityFilter> filter_;  // from the first message's size
   std::int64_t last_t_us_ = kNoTime;
-  ros::Subscriber events_sub_;
+  EventInputType input_type_ = EventInputType::kAuto;
   ros::Publisher events_pub_;
   std::unique_ptr<ebslam_ros_common::RuntimeKnobs<EventDenoiserKnobsConfig>> reconfigure_;
   boost::recursive_mutex reconfigure_mutex_;
@@ -223,6 +226,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
   std::uint64_t messages_ = 0, events_in_ = 0, passed_ = 0, rejected_ = 0, empty_messages_ = 0,
                 rejected_size_ = 0, outside_ = 0, clamped_ = 0, restarts_ = 0;
   std::uint64_t bad_input_seen_ = 0, bad_input_reported_ = 0;
+  EventSubscriber events_sub_;  // last member: stopped before the state its callbacks use
 };
 
 }  // namespace ebslam_ros

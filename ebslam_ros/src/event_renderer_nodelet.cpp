@@ -19,6 +19,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
 
+#include "ebslam_ros/event_input.h"
 #include "event_renderer_params.h"
 
 namespace ebslam_ros {
@@ -32,10 +33,14 @@ class EventRendererNodelet : public nodelet::Nodelet {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "event renderer " + getName(), [&] {
       config_ = loadEventRendererConfig(getPrivateNodeHandle());
+      input_type_ = readEventInputType(getPrivateNodeHandle());
     });
     ros::NodeHandle& nh = getNodeHandle();
     image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);
-    events_sub_ = nh.subscribe("events", 100, &EventRendererNodelet::onEvents, this);
+    events_sub_.subscribe(
+        nh, "events", 100, input_type_,
+        [this](const ebslam_msgs::EventArray::ConstPtr& msg) { onEvents(msg); },
+        ros::TransportHints(), getName());
     image_sub_ = nh.subscribe("image", 1, &EventRendererNodelet::onImage, this);
     timer_ = nh.createWallTimer(ros::WallDuration(1.0 / config_.publish_rate_hz),
                                 &EventRendererNodelet::render, this);
@@ -137,9 +142,11 @@ class EventRendererNodelet : public nodelet::Nodelet {
   std::uint32_t width_ = 0, height_ = 0;
   std::string frame_id_;
   sensor_msgs::Image::ConstPtr background_;
-  ros::Subscriber events_sub_, image_sub_;
+  ros::Subscriber image_sub_;
+  EventInputType input_type_ = EventInputType::kAuto;
   ros::Publisher image_pub_;
   ros::WallTimer timer_;
+  EventSubscriber events_sub_;  // last member: stopped before the state its callbacks use
 };
 
 }  // namespace ebslam_ros

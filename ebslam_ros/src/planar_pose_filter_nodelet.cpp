@@ -39,6 +39,7 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
   knobs_ = knobs;
   factory_ = std::move(factory);
   start_pose_ = config_.initial_pose;
+  input_type_ = readEventInputType(getPrivateNodeHandle());
   guard_.emplace(ebslam::SensorSize{static_cast<std::uint32_t>(config_.sensor.camera.width),
                                     static_cast<std::uint32_t>(config_.sensor.camera.height)},
                  static_cast<std::int64_t>(std::llround(config_.max_backward_s * 1e6)),
@@ -83,9 +84,10 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
       [this](EventFilterKnobsConfig& k, std::uint32_t level) { onReconfigure(k, level); });
 
   startDiagnostics();
-  events_sub_ =
-      nh.subscribe("events", static_cast<std::uint32_t>(config_.queue_size),
-                   &PlanarPoseFilterNodelet::onEvents, this, ros::TransportHints().tcpNoDelay());
+  events_sub_.subscribe(
+      nh, "events", static_cast<std::uint32_t>(config_.queue_size), input_type_,
+      [this](const ebslam_msgs::EventArray::ConstPtr& msg) { onEvents(msg); },
+      ros::TransportHints().tcpNoDelay(), getName());
 }
 
 bool PlanarPoseFilterNodelet::resolveMount() {

@@ -141,7 +141,8 @@ class PlanarPoseFilterNodelet : public PoseFilterNodeletBase {
   /// ~denoise: the background-activity filter between the guard and the pose filter.
   std::optional<ebslam::BackgroundActivityFilter> denoiser_;
 
-  ros::Subscriber events_sub_;
+  EventInputType input_type_ = EventInputType::kAuto;
+  EventSubscriber events_sub_;
   ros::ServiceServer reset_srv_;
   // Map localisation (EB-PF): rviz's initial pose, AMCL's global localisation, odometry.
   bool map_localisation_ = false;

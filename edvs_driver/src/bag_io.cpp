@@ -3,10 +3,12 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
+#include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
-#include "ebslam_msgs/event_conversions.h"
+#include "ebslam_msgs/event_packet_conversions.h"
 
 namespace edvs_driver {
 
@@ -17,22 +19,27 @@ BagReadResult readEventBag(const std::string& path, const std::string& topic) {
     rosbag::View all(bag);
     std::vector<std::string> topics;
     for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-      const bool type_ok =
-          c->datatype == "ebslam_msgs/EventArray" || c->datatype == "dvs_msgs/EventArray";
+      const bool type_ok = ebslam_msgs::isEventArrayDatatype(c->datatype) ||
+                           ebslam_msgs::isEventPacketDatatype(c->datatype);
       if (type_ok && (topic.empty() || c->topic == topic)) topics.push_back(c->topic);
     }
     if (topics.empty()) {
-      throw std::runtime_error("bag " + path + " has no EventArray messages" +
+      throw std::runtime_error("bag " + path + " has no EventArray or EventPacket messages" +
                                (topic.empty() ? std::string() : " on topic " + topic));
     }
     std::set<std::string> unique(topics.begin(), topics.end());
     result.topics.assign(unique.begin(), unique.end());
     rosbag::View view(bag, rosbag::TopicQuery(result.topics));
+    std::map<std::string, ebslam_msgs::EventPacketConverter> streams;  // decoder state per topic
     for (const rosbag::MessageInstance& m : view) {
-      const auto msg = m.instantiate<ebslam_msgs::EventArray>();
-      if (!msg) continue;
-      const ebslam::SensorSize size = ebslam_msgs::appendFromMsg(*msg, result.events);
-      if (result.messages == 0) result.sensor = size;
+      std::string error;
+      const std::optional<ebslam::SensorSize> size =
+          ebslam_msgs::appendRecordedEvents(m, streams[m.getTopic()], result.events, &error);
+      if (!size) {
+        if (!error.empty()) ++result.rejected_packets;
+        continue;
+      }
+      if (result.messages == 0) result.sensor = *size;
       ++result.messages;
     }
   } catch (const rosbag::BagException& e) {

@@ -2,7 +2,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <rosbag/bag.h>
+#include <topic_tools/shape_shifter.h>
+
 #include <filesystem>
+
+#include "ebslam/events/event_packet.h"
+#include "ebslam_msgs/event_packet_conversions.h"
 
 #include "ebslam/events/event_io.h"
 #include "edvs/emulator.h"
@@ -55,6 +61,68 @@ TEST(BagIo, WriteReadRoundTripAndConvertThroughBinary) {
   EXPECT_THROW(edvs_driver::readEventBag("/nonexistent/x.bag"), std::runtime_error);
   options.batch_us = 0;
   EXPECT_THROW(edvs_driver::writeEventBag(bag, events, {}, options), std::invalid_argument);
+}
+
+// Writes msg into the bag under another package's datatype (same MD5), as a recorder of that
+// driver's topic does.
+template <class M>
+void writeAs(rosbag::Bag& bag, const std::string& topic, const std::string& datatype,
+             const M& msg) {
+  std::vector<std::uint8_t> bytes(ros::serialization::serializationLength(msg));
+  ros::serialization::OStream out(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  ros::serialization::serialize(out, msg);
+  topic_tools::ShapeShifter shape;
+  shape.morph(ros::message_traits::md5sum<M>(), datatype, ros::message_traits::definition<M>(), "");
+  ros::serialization::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  shape.read(in);
+  bag.write(topic, std::max(msg.header.stamp, ros::TIME_MIN), shape);
+}
+
+// Bags of prophesee_ros_driver (prophesee_event_msgs/EventArray) and of libcaer_driver /
+// metavision_driver (event_camera_msgs/EventPacket: the real evt3 and libcaer recordings) read
+// as the driver recorded them: every event, decoder state per topic.
+TEST(BagIo, ReadsPropheseeArraysAndEventPackets) {
+  const std::string dir = EVENT_PACKETS_DIR;
+  const auto evt3 = ebslam::readEventPacketFile(dir + "/evt3_prophesee_1280x720.evpk");
+  const auto libcaer = ebslam::readEventPacketFile(dir + "/libcaer_rollover_640x480.evpk");
+  ebslam_msgs::EventPacketConverter expect_evt3, expect_libcaer;
+  ebslam::EventVector evt3_events, libcaer_events;
+  const std::string bag_path = tempPath("drivers.bag");
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+    // Interleaved topics: each keeps its own decoder.
+    for (std::size_t i = 0; i < std::max(evt3.size(), libcaer.size()); ++i) {
+      if (i < evt3.size()) {
+        const auto msg = ebslam_msgs::toMsg(evt3[i]);
+        ASSERT_FALSE(expect_evt3.append(msg, evt3_events).rejected);
+        writeAs(bag, "/prophesee/events", "event_camera_msgs/EventPacket", msg);
+      }
+      if (i < libcaer.size()) {
+        const auto msg = ebslam_msgs::toMsg(libcaer[i]);
+        ASSERT_FALSE(expect_libcaer.append(msg, libcaer_events).rejected);
+        writeAs(bag, "/davis/events", "event_camera_msgs/EventPacket", msg);
+      }
+    }
+    // The evt3 events once more as prophesee_ros_driver publishes them.
+    ebslam::EventVector first(evt3_events.begin(), evt3_events.begin() + 5000);
+    writeAs(bag, "/prophesee_driver/cd_events_buffer", "prophesee_event_msgs/EventArray",
+            ebslam_msgs::toMsg(first, {1280, 720}, "prophesee_optical_frame"));
+  }
+  EXPECT_EQ(evt3_events.size(), 34134u);
+  EXPECT_EQ(libcaer_events.size(), 38422u);
+  const auto p = edvs_driver::readEventBag(bag_path, "/prophesee/events");
+  EXPECT_EQ(p.events, evt3_events);
+  EXPECT_EQ(p.sensor.width, 1280u);
+  EXPECT_EQ(p.sensor.height, 720u);
+  EXPECT_EQ(p.messages, evt3.size());
+  const auto d = edvs_driver::readEventBag(bag_path, "/davis/events");
+  EXPECT_EQ(d.events, libcaer_events);
+  EXPECT_EQ(d.sensor.width, 640u);
+  EXPECT_EQ(d.rejected_packets, 0u);
+  const auto a = edvs_driver::readEventBag(bag_path, "/prophesee_driver/cd_events_buffer");
+  EXPECT_EQ(a.events, ebslam::EventVector(evt3_events.begin(), evt3_events.begin() + 5000));
+  EXPECT_EQ(edvs_driver::readEventBag(bag_path).topics.size(), 3u);
+  std::filesystem::remove(bag_path);
 }
 
 TEST(RosParams, ValidateNamesTheParameter) {

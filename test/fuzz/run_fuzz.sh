@@ -18,7 +18,8 @@ results="${FUZZ_RESULTS:-${build}/test_results}"
 jobs="${JOBS:-$(nproc)}"
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(image_fuzzer camera_info_fuzzer event_array_fuzzer
-                                     depth_event_array_fuzzer superpixel_array_fuzzer)
+                                     depth_event_array_fuzzer superpixel_array_fuzzer
+                                     event_packet_fuzzer)
 mkdir -p "${build}" "${results}"
 if ! { cmake -S "${here}" -B "${build}" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
          >"${build}/configure.log" 2>&1 &&

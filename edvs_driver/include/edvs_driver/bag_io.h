@@ -16,13 +16,15 @@ struct BagReadResult {
   ebslam::EventVector events;  ///< all events of the selected topics, in bag (time) order
   ebslam::SensorSize sensor;   ///< from the first message (width/height)
   std::size_t messages = 0;
-  std::vector<std::string> topics;  ///< topics that contributed
+  std::size_t rejected_packets = 0;  ///< EventPackets that could not be decoded (e.g. encoding)
+  std::vector<std::string> topics;   ///< topics that contributed
 };
 
-/// Reads every ebslam_msgs/EventArray (or dvs_msgs/EventArray: same definition and MD5) message
-/// on `topic`, or on every topic of that type when `topic` is empty. Event times are
-/// microseconds since the ROS epoch. Throws std::runtime_error if the bag cannot be read or
-/// holds no such messages.
+/// Reads every event message on `topic`, or on every topic of an event type when `topic` is
+/// empty: ebslam_msgs/EventArray, dvs_msgs/EventArray, prophesee_event_msgs/EventArray (one
+/// definition and MD5) and event_camera_msgs/EventPacket (evt3, libcaer_cmp, libcaer, mono;
+/// ebslam_msgs/event_packet_conversions.h). Event times are microseconds since the ROS epoch.
+/// Throws std::runtime_error if the bag cannot be read or holds no such messages.
 BagReadResult readEventBag(const std::string& path, const std::string& topic = "");
 
 struct BagWriteOptions {

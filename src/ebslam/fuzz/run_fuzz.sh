@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Builds and runs the libFuzzer targets for the event file and TUM trajectory readers.
+# Builds and runs the libFuzzer targets for the event file and TUM trajectory readers, the
+# event packet decoders (one target per encoding) and the event packet file reader.
 # Not part of the normal build: compiles the reader sources directly with clang++.
 #
 #   src/ebslam/fuzz/run_fuzz.sh [seconds per target, default 180] [target ...]
@@ -16,7 +17,8 @@ seconds="${1:-180}"
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(fuzz_event_reader fuzz_tum_reader)
+  targets=(fuzz_event_reader fuzz_tum_reader fuzz_evt3_decoder fuzz_libcaer_decoder
+           fuzz_libcaer_cmp_decoder fuzz_mono_decoder fuzz_event_packet_file)
 fi
 work="${FUZZ_WORK:-/tmp/ebslam_fuzz}"
 cxx="${CXX_FUZZ:-clang++}"
@@ -26,6 +28,11 @@ flags=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,undef
 declare -A sources=(
   [fuzz_event_reader]="${lib}/src/events/event_io.cpp ${lib}/src/events/event_file_writer.cpp"
   [fuzz_tum_reader]="${lib}/src/events/trajectory.cpp"
+  [fuzz_evt3_decoder]="${lib}/src/events/event_packet.cpp"
+  [fuzz_libcaer_decoder]="${lib}/src/events/event_packet.cpp"
+  [fuzz_libcaer_cmp_decoder]="${lib}/src/events/event_packet.cpp"
+  [fuzz_mono_decoder]="${lib}/src/events/event_packet.cpp"
+  [fuzz_event_packet_file]="${lib}/src/events/event_packet.cpp"
 )
 
 status=0
