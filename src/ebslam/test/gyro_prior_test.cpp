@@ -136,7 +136,11 @@ TEST(GyroPrior, BiasUncertaintyGrowsWithItsRandomWalk) {
   GyroPrior gyro(config);
   for (int k = 0; k <= 100; ++k) gyro.add(100000LL * k, Eigen::Vector3d::Zero());  // 10 s
   EXPECT_NEAR(gyro.biasStd().x(), 0.01 * std::sqrt(10.0), 1e-9);
-  EXPECT_NEAR(gyro.rotationVariance(0.5),
+  EXPECT_NEAR(gyro.rotationVariance(0.5, 10000000),
+              config.noise_density * config.noise_density * 0.5 + 0.001 * 0.25, 1e-12);
+  // The variance at a time does not depend on samples beyond it.
+  gyro.add(20000000, Eigen::Vector3d::Zero());
+  EXPECT_NEAR(gyro.rotationVariance(0.5, 10000000),
               config.noise_density * config.noise_density * 0.5 + 0.001 * 0.25, 1e-12);
 }
 

@@ -622,7 +622,7 @@ double EventSlam3d::applyGyroPrior(double fallback_var, double per_event_var) {
   particles_.rotateBody(delta->cast<float>());
   const double dt_s = 1e-6 * static_cast<double>(t1 - t0);
   const double s = config_.imu.sigma_rotation_per_sqrt_s;
-  return per_event_var + s * s * dt_s + gyro_.rotationVariance(dt_s);
+  return per_event_var + s * s * dt_s + gyro_.rotationVariance(dt_s, t1);
 }
 
 void EventSlam3d::updateGyroBias() {

@@ -70,20 +70,21 @@ GyroPrior::AddResult GyroPrior::add(const GyroSample& sample) {
   if (!sample.rate.allFinite()) return AddResult::kNonFinite;
   if (sample.rate.cwiseAbs().maxCoeff() > config_.max_rate) return AddResult::kSaturated;
   if (!samples_.empty() && sample.t_us <= samples_.back().t_us) return AddResult::kOutOfOrder;
-  growBiasVariance(sample.t_us);
+  if (!bias_cov_time_set_) {
+    bias_cov_time_set_ = true;
+    bias_cov_time_us_ = sample.t_us;
+  }
   samples_.push_back(sample);
   return AddResult::kAccepted;
 }
 
-void GyroPrior::growBiasVariance(std::int64_t t_us) {
-  if (bias_var_time_set_ && t_us > bias_var_time_us_) {
-    const double dt = 1e-6 * static_cast<double>(t_us - bias_var_time_us_);
-    bias_cov_.diagonal().array() += config_.bias_random_walk * config_.bias_random_walk * dt;
+Eigen::Matrix3d GyroPrior::biasCovarianceAt(std::int64_t t_us) const {
+  Eigen::Matrix3d c = bias_cov_;
+  if (bias_cov_time_set_ && t_us > bias_cov_time_us_) {
+    const double dt = 1e-6 * static_cast<double>(t_us - bias_cov_time_us_);
+    c.diagonal().array() += config_.bias_random_walk * config_.bias_random_walk * dt;
   }
-  if (!bias_var_time_set_ || t_us > bias_var_time_us_) {
-    bias_var_time_us_ = t_us;
-    bias_var_time_set_ = true;
-  }
+  return c;
 }
 
 std::int64_t GyroPrior::lastSampleTime() const {
@@ -140,12 +141,14 @@ std::optional<Eigen::Quaterniond> GyroPrior::deltaRotation(std::int64_t t0_us,
   return (sensor_from_imu_ * *imu * sensor_from_imu_.conjugate()).normalized();
 }
 
-double GyroPrior::rotationVariance(double dt_s) const {
+double GyroPrior::rotationVariance(double dt_s, std::int64_t at_us) const {
   return config_.noise_density * config_.noise_density * dt_s +
-         bias_cov_.diagonal().maxCoeff() * dt_s * dt_s;
+         biasCovarianceAt(at_us).diagonal().maxCoeff() * dt_s * dt_s;
 }
 
-Eigen::Vector3d GyroPrior::biasStd() const { return bias_cov_.diagonal().cwiseSqrt(); }
+Eigen::Vector3d GyroPrior::biasStd() const {
+  return biasCovarianceAt(lastSampleTime()).diagonal().cwiseSqrt();
+}
 
 void GyroPrior::setBias(const Eigen::Vector3d& bias_imu, double std_rad_s) {
   if (!bias_imu.allFinite() || !(std_rad_s >= 0.0) || !std::isfinite(std_rad_s)) {
@@ -153,6 +156,8 @@ void GyroPrior::setBias(const Eigen::Vector3d& bias_imu, double std_rad_s) {
   }
   bias_ = bias_imu;
   bias_cov_ = std_rad_s * std_rad_s * Eigen::Matrix3d::Identity();
+  bias_cov_time_set_ = !samples_.empty();
+  bias_cov_time_us_ = samples_.empty() ? 0 : samples_.back().t_us;
 }
 
 bool GyroPrior::updateBias(std::int64_t t0_us, std::int64_t t1_us,
@@ -168,13 +173,15 @@ bool GyroPrior::updateBias(std::int64_t t0_us, std::int64_t t1_us,
   const Eigen::Vector3d residual = logRotation(estimated_imu.conjugate() * *imu);
   const double dt = 1e-6 * static_cast<double>(t1_us - t0_us);
   const Eigen::Matrix3d h = -jacobian;  // residual = h (bias_true - bias_) + noise
+  const Eigen::Matrix3d prior = biasCovarianceAt(t1_us);
   const double r = config_.measurement_std_rad * config_.measurement_std_rad +
                    config_.noise_density * config_.noise_density * dt;
-  const Eigen::Matrix3d s = h * bias_cov_ * h.transpose() + r * Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d gain = bias_cov_ * h.transpose() * s.inverse();
+  const Eigen::Matrix3d s = h * prior * h.transpose() + r * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d gain = prior * h.transpose() * s.inverse();
   bias_ += gain * residual;
-  bias_cov_ = (Eigen::Matrix3d::Identity() - gain * h) * bias_cov_;
-  bias_cov_ = 0.5 * (bias_cov_ + bias_cov_.transpose()).eval();
+  const Eigen::Matrix3d posterior = (Eigen::Matrix3d::Identity() - gain * h) * prior;
+  bias_cov_ = 0.5 * (posterior + posterior.transpose());
+  bias_cov_time_us_ = std::max(bias_cov_time_us_, t1_us);
   return true;
 }
 

@@ -81,9 +81,10 @@ class GyroPrior {
   /// As deltaRotation without the bias correction, in the IMU frame.
   std::optional<Eigen::Quaterniond> rawDeltaRotationImu(std::int64_t t0_us,
                                                         std::int64_t t1_us) const;
-  /// Variance of each axis of deltaRotation's error over dt_s [rad^2]: white noise
-  /// noise_density^2 dt plus the bias uncertainty (per axis, largest) times dt^2.
-  double rotationVariance(double dt_s) const;
+  /// Variance of each axis of deltaRotation's error over dt_s [rad^2] for an interval ending at
+  /// at_us: white noise noise_density^2 dt plus the bias uncertainty at at_us (per axis,
+  /// largest) times dt^2.
+  double rotationVariance(double dt_s, std::int64_t at_us) const;
 
   /// Bias measurement: `estimated` is an independent estimate of the sensor's rotation from
   /// t0_us to t1_us (same convention as deltaRotation). Updates the bias estimate with the
@@ -92,7 +93,7 @@ class GyroPrior {
   bool updateBias(std::int64_t t0_us, std::int64_t t1_us, const Eigen::Quaterniond& estimated);
 
   /// Current bias estimate, IMU frame [rad/s], and its std. dev. per axis [rad/s] (grown by the
-  /// random walk up to the last sample's time).
+  /// random walk from the last measurement up to the last sample's time).
   const Eigen::Vector3d& bias() const { return bias_; }
   Eigen::Vector3d biasStd() const;
   void setBias(const Eigen::Vector3d& bias_imu, double std_rad_s);
@@ -112,7 +113,8 @@ class GyroPrior {
   void setConfig(const GyroPriorConfig& config);
 
  private:
-  void growBiasVariance(std::int64_t t_us);
+  // Bias covariance grown by the random walk from its reference time to t_us.
+  Eigen::Matrix3d biasCovarianceAt(std::int64_t t_us) const;
   // Integrates the rates minus `bias` (IMU frame) over [t0, t1]; optionally the sensitivity of
   // the result's rotation vector to a bias error (d log / d bias, IMU frame).
   std::optional<Eigen::Quaterniond> integrate(std::int64_t t0_us, std::int64_t t1_us,
@@ -123,9 +125,12 @@ class GyroPrior {
   Eigen::Quaterniond sensor_from_imu_;  // normalised
   std::deque<GyroSample> samples_;
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();  // IMU frame [rad/s]
-  Eigen::Matrix3d bias_cov_;                        // [rad^2/s^2]
-  std::int64_t bias_var_time_us_ = 0;  // time up to which bias_var_ holds the random walk
-  bool bias_var_time_set_ = false;
+  // Bias covariance [rad^2/s^2] at bias_cov_time_us_ (the last bias measurement, else the first
+  // sample); it grows from there with the random walk at the time of a query, so that results
+  // do not depend on how far ahead of the events the samples arrived.
+  Eigen::Matrix3d bias_cov_;
+  std::int64_t bias_cov_time_us_ = 0;
+  bool bias_cov_time_set_ = false;
 };
 
 /// Rotation R (unit quaternion) that best maps `from` vectors onto `to` vectors (Kabsch /
