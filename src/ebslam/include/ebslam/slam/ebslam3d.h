@@ -74,7 +74,7 @@ struct Ebslam3dImuConfig {
   GyroPriorConfig gyro;
   /// Rotation diffusion kept besides the gyro's own noise [rad / sqrt(s) of event time]: room
   /// for the map to correct calibration and model errors.
-  double sigma_rotation_per_sqrt_s = 0.05;
+  double sigma_rotation_per_sqrt_s = 0.1;
   bool estimate_bias = true;
   double bias_window_s = 0.5;  ///< [s of event time]
 };
