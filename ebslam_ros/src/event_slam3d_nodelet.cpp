@@ -223,7 +223,11 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     if (!slam_) {
       slam_ = std::make_unique<ebslam::EventSlam3d>(
           config_.slam, ebslam::Pose3::fromIsometry(initial_base_ * *mount_));
-      for (const ebslam::GyroSample& sample : imu_recent_) slam_->addGyro(sample.t_us, sample.rate);
+      if (imu_rotation_known_) {
+        for (const ebslam::GyroSample& sample : imu_recent_) {
+          slam_->addGyro(sample.t_us, sample.rate);
+        }
+      }
     }
     const auto chunk = static_cast<std::size_t>(config_.max_events_per_update);
     for (std::size_t i = 0; i < segment.events.size(); i += chunk) {
@@ -450,7 +454,12 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
   void setImuRotation(const Eigen::Quaterniond& sensor_from_imu) {
     config_.slam.imu.gyro.sensor_from_imu = sensor_from_imu.normalized();
     imu_rotation_known_ = true;
-    if (slam_) slam_->setConfig(config_.slam);
+    if (slam_) {
+      slam_->setConfig(config_.slam);
+      // Samples kept while the rotation was unknown (rates are stored in the IMU frame).
+      for (const ebslam::GyroSample& sample : imu_recent_) slam_->addGyro(sample.t_us, sample.rate);
+    }
+    if (!imu_recent_.empty()) imu_latest_us_ = imu_recent_.back().t_us;
   }
 
   void onImu(const sensor_msgs::Imu::ConstPtr& msg) {
@@ -467,38 +476,45 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     };
     if (msg->header.stamp.isZero()) return reject("stamp is 0");
     if (msg->angular_velocity_covariance[0] == -1.0) return reject("it has no angular velocity");
-    if (!imu_rotation_known_) {
+    if (config_.imu_rotation_from_tf) {
       if (msg->header.frame_id.empty()) return reject("empty frame_id (needed for the tf lookup)");
-      try {
-        const geometry_msgs::TransformStamped t = imu_tf_buffer_->lookupTransform(
-            config_.sensor_frame, msg->header.frame_id, ros::Time(0));
-        const auto& q = t.transform.rotation;
-        setImuRotation(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
-        imu_frame_ = msg->header.frame_id;
-        NODELET_INFO("IMU frame '%s' -> '%s' from tf", imu_frame_.c_str(),
-                     config_.sensor_frame.c_str());
-      } catch (const tf2::TransformException& error) {
-        return reject(("no tf " + msg->header.frame_id + " -> " + config_.sensor_frame +
-                       " yet: " + error.what())
-                          .c_str());
+      if (imu_frame_.empty()) imu_frame_ = msg->header.frame_id;
+      if (msg->header.frame_id != imu_frame_) {
+        return reject("frame_id differs from the IMU frame of the first message");
       }
-    } else if (!imu_frame_.empty() && msg->header.frame_id != imu_frame_) {
-      return reject("frame_id differs from the IMU frame of the first message");
     }
     const ebslam::GyroSample sample{t_us, Eigen::Vector3d(w.x, w.y, w.z)};
     if (!sample.rate.allFinite()) return reject("non-finite angular velocity");
     if (!imu_recent_.empty() && t_us <= imu_recent_.back().t_us) {
       return reject("not after the previous IMU message (out of order or repeated)");
     }
-    if (slam_) {
-      const ebslam::GyroPrior::AddResult result = slam_->addGyro(t_us, sample.rate);
-      if (result == ebslam::GyroPrior::AddResult::kSaturated) {
-        return reject("angular velocity beyond the gyro's range (saturated?)");
-      }
-    } else if (sample.rate.cwiseAbs().maxCoeff() > config_.slam.imu.gyro.max_rate) {
+    if (sample.rate.cwiseAbs().maxCoeff() > config_.slam.imu.gyro.max_rate) {
       return reject("angular velocity beyond the gyro's range (saturated?)");
     }
     ++imu_.accepted;
+    if (!imu_rotation_known_) {
+      // Kept (below) until tf has the IMU's mounting; events wait for it up to ~imu_max_wait.
+      try {
+        const geometry_msgs::TransformStamped t =
+            imu_tf_buffer_->lookupTransform(config_.sensor_frame, imu_frame_, ros::Time(0));
+        const auto& q = t.transform.rotation;
+        NODELET_INFO("IMU frame '%s' -> '%s' from tf", imu_frame_.c_str(),
+                     config_.sensor_frame.c_str());
+        imu_recent_.push_back(sample);
+        setImuRotation(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
+        drainHeld(false);
+        return;
+      } catch (const tf2::TransformException& error) {
+        if (imu_tf_log_.due()) {
+          NODELET_WARN("IMU samples kept until tf has %s -> %s: %s", imu_frame_.c_str(),
+                       config_.sensor_frame.c_str(), error.what());
+        }
+        imu_recent_.push_back(sample);
+        while (imu_recent_.front().t_us < t_us - 1000000) imu_recent_.pop_front();
+        return;
+      }
+    }
+    if (slam_) slam_->addGyro(t_us, sample.rate);
     if (processed_event_us_ != kNoTime && t_us < processed_event_us_) {
       ++imu_.late;
       if (imu_late_log_.due()) {
@@ -566,7 +582,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
   std::int64_t processed_event_us_ = kNoTime;  // newest event processed [us]
   ImuCounters imu_;
   WallThrottle imu_reject_log_{kWarnPeriodS}, imu_late_log_{kWarnPeriodS},
-      imu_uncovered_log_{kWarnPeriodS};
+      imu_uncovered_log_{kWarnPeriodS}, imu_tf_log_{kWarnPeriodS};
 
   // ---- end IMU ----
 
