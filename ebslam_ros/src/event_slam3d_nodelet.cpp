@@ -10,14 +10,20 @@
 // Outputs (relative names): pose, path, particles (while subscribed), map (PointCloud2 of the
 // voxels above ~map_threshold, every ~map_publish_period s of wall time while subscribed), tf,
 // /diagnostics; services reset and save_map; dynamic_reconfigure knobs (EventSlam3dKnobs.cfg).
+// With ~use_imu, input `imu` (sensor_msgs/Imu, angular velocity in its frame_id, stamps on the
+// events' clock) feeds the core's gyro rotation prior; events wait until the IMU covers them (at
+// most ~imu_max_wait of event time), so that the result is the offline core's on the same data.
 // Mounting, input checks, pose, path, particles, tf and diagnostics: PoseFilterNodeletBase.
 #include <ebslam_msgs/DepthEventArray.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
 #include <ebslam_ros_common/runtime_knobs.h>
 #include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <ebslam/slam/ebslam3d.h>
@@ -29,6 +35,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -98,6 +105,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     stopDiagnostics();
     map_timer_.stop();
     events_sub_.shutdown();
+    imu_sub_.shutdown();
   }
 
  private:
@@ -144,6 +152,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
       events_sub_ =
           nh.subscribe("depth_events", static_cast<std::uint32_t>(config_.queue_size),
                        &EventSlam3dNodelet::onEvents, this, ros::TransportHints().tcpNoDelay());
+      startImu();
       NODELET_INFO("EB-SLAM-3D: %.3f m voxels, N=%d B=%d K=%d, ranges %.2f..%.2f m",
                    config_.slam.voxel_size_m, config_.slam.num_particles, config_.slam.batch_size,
                    config_.slam.resample_every, config_.slam.min_range_m, config_.slam.max_range_m);
@@ -196,7 +205,11 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
       return;
     }
     std::vector<DepthEventSegment> segments = takeEvents(*msg);
-    for (DepthEventSegment& segment : segments) processSegment(segment);
+    if (config_.use_imu) {
+      holdForImu(std::move(segments));
+    } else {
+      for (DepthEventSegment& segment : segments) processSegment(segment);
+    }
     addProcessingTime(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count());
   }
@@ -210,6 +223,11 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     if (!slam_) {
       slam_ = std::make_unique<ebslam::EventSlam3d>(
           config_.slam, ebslam::Pose3::fromIsometry(initial_base_ * *mount_));
+      if (imu_rotation_known_) {
+        for (const ebslam::GyroSample& sample : imu_recent_) {
+          slam_->addGyro(sample.t_us, sample.rate);
+        }
+      }
     }
     const auto chunk = static_cast<std::size_t>(config_.max_events_per_update);
     for (std::size_t i = 0; i < segment.events.size(); i += chunk) {
@@ -315,6 +333,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     slam_.reset();  // restarts with the next events
     clearPath();
     guard_.restart();
+    held_.clear();
     last_stamp_us_ = kNoTime;
     response.success = true;
     response.message = "filter restarts at ~initial_pose with an empty map with the next events";
@@ -387,6 +406,12 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
   void diagnoseInput(diagnostic_updater::DiagnosticStatusWrapper& status) const override {
     status.add("events without depth", no_depth_);
     status.add("events out of range", out_of_range_);
+    if (config_.use_imu) {
+      status.add("IMU samples", imu_.accepted);
+      status.add("IMU samples rejected", imu_.rejected);
+      status.add("IMU samples late", imu_.late);
+      status.add("events processed without IMU cover", imu_.uncovered_events);
+    }
   }
 
   void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& status) const override {
@@ -401,7 +426,165 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     status.add("map chunks", slam_->map().chunkCount());
     status.add("map memory [MiB]", static_cast<double>(slam_->memoryBytes()) / (1024.0 * 1024.0));
     status.add("map chunks evicted", slam_->map().evictedChunks());
+    if (config_.use_imu) {
+      const Eigen::Vector3d bias = slam_->gyro().bias();
+      status.add("gyro bias [rad/s] (IMU frame)", std::to_string(bias.x()) + " " +
+                                                      std::to_string(bias.y()) + " " +
+                                                      std::to_string(bias.z()));
+      status.add("batches rotated by the gyro", slam_->gyroPredictedBatches());
+    }
   }
+
+  // ---- IMU (gyro rotation prior) ----
+
+  void startImu() {
+    if (!config_.use_imu) return;
+    if (config_.imu_rotation_from_tf) {
+      imu_tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+      imu_tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*imu_tf_buffer_);
+    } else {
+      setImuRotation(Eigen::Quaterniond(fromXyzRpy({0.0, 0.0, 0.0}, config_.imu_rpy).rotation()));
+    }
+    imu_sub_ = getNodeHandle().subscribe("imu", 2000, &EventSlam3dNodelet::onImu, this,
+                                         ros::TransportHints().tcpNoDelay());
+    NODELET_INFO("gyro rotation prior on: IMU -> %s rotation from %s", config_.sensor_frame.c_str(),
+                 config_.imu_rotation_from_tf ? "tf" : "~imu_rpy");
+  }
+
+  void setImuRotation(const Eigen::Quaterniond& sensor_from_imu) {
+    config_.slam.imu.gyro.sensor_from_imu = sensor_from_imu.normalized();
+    imu_rotation_known_ = true;
+    if (slam_) {
+      slam_->setConfig(config_.slam);
+      // Samples kept while the rotation was unknown (rates are stored in the IMU frame).
+      for (const ebslam::GyroSample& sample : imu_recent_) slam_->addGyro(sample.t_us, sample.rate);
+    }
+    if (!imu_recent_.empty()) imu_latest_us_ = imu_recent_.back().t_us;
+  }
+
+  void onImu(const sensor_msgs::Imu::ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex());
+    const auto& w = msg->angular_velocity;
+    const std::int64_t t_us = ebslam_msgs::toMicroseconds(msg->header.stamp);
+    const auto reject = [&](const char* why) {
+      ++imu_.rejected;
+      ++counters().bad_input;
+      if (imu_reject_log_.due()) {
+        NODELET_WARN("IMU message stamped %.6f s dropped: %s (%lu dropped so far)",
+                     msg->header.stamp.toSec(), why, static_cast<unsigned long>(imu_.rejected));
+      }
+    };
+    if (msg->header.stamp.isZero()) return reject("stamp is 0");
+    if (msg->angular_velocity_covariance[0] == -1.0) return reject("it has no angular velocity");
+    if (config_.imu_rotation_from_tf) {
+      if (msg->header.frame_id.empty()) return reject("empty frame_id (needed for the tf lookup)");
+      if (imu_frame_.empty()) imu_frame_ = msg->header.frame_id;
+      if (msg->header.frame_id != imu_frame_) {
+        return reject("frame_id differs from the IMU frame of the first message");
+      }
+    }
+    const ebslam::GyroSample sample{t_us, Eigen::Vector3d(w.x, w.y, w.z)};
+    if (!sample.rate.allFinite()) return reject("non-finite angular velocity");
+    if (!imu_recent_.empty() && t_us <= imu_recent_.back().t_us) {
+      return reject("not after the previous IMU message (out of order or repeated)");
+    }
+    if (sample.rate.cwiseAbs().maxCoeff() > config_.slam.imu.gyro.max_rate) {
+      return reject("angular velocity beyond the gyro's range (saturated?)");
+    }
+    ++imu_.accepted;
+    if (!imu_rotation_known_) {
+      // Kept (below) until tf has the IMU's mounting; events wait for it up to ~imu_max_wait.
+      try {
+        const geometry_msgs::TransformStamped t =
+            imu_tf_buffer_->lookupTransform(config_.sensor_frame, imu_frame_, ros::Time(0));
+        const auto& q = t.transform.rotation;
+        NODELET_INFO("IMU frame '%s' -> '%s' from tf", imu_frame_.c_str(),
+                     config_.sensor_frame.c_str());
+        imu_recent_.push_back(sample);
+        setImuRotation(Eigen::Quaterniond(q.w, q.x, q.y, q.z));
+        drainHeld(false);
+        return;
+      } catch (const tf2::TransformException& error) {
+        if (imu_tf_log_.due()) {
+          NODELET_WARN("IMU samples kept until tf has %s -> %s: %s", imu_frame_.c_str(),
+                       config_.sensor_frame.c_str(), error.what());
+        }
+        imu_recent_.push_back(sample);
+        while (imu_recent_.front().t_us < t_us - 1000000) imu_recent_.pop_front();
+        return;
+      }
+    }
+    if (slam_) slam_->addGyro(t_us, sample.rate);
+    if (processed_event_us_ != kNoTime && t_us < processed_event_us_) {
+      ++imu_.late;
+      if (imu_late_log_.due()) {
+        NODELET_WARN(
+            "IMU message %.3f s older than events already processed: it arrives too "
+            "late for the gyro prior (raise ~imu_max_wait?)",
+            1e-6 * static_cast<double>(processed_event_us_ - t_us));
+      }
+    }
+    imu_recent_.push_back(sample);
+    // Kept for a filter (re)started by the next events: the last second.
+    while (!imu_recent_.empty() && imu_recent_.front().t_us < t_us - 1000000) {
+      imu_recent_.pop_front();
+    }
+    imu_latest_us_ = t_us;
+    drainHeld(false);
+  }
+
+  void holdForImu(std::vector<DepthEventSegment> segments) {
+    for (DepthEventSegment& segment : segments) {
+      if (segment.events.empty()) continue;
+      newest_event_us_ = segment.events.back().t_us;
+      held_.push_back(std::move(segment));
+    }
+    drainHeld(false);
+  }
+
+  /// Processes held segments the IMU covers, and those waiting longer than ~imu_max_wait.
+  void drainHeld(bool all) {
+    const auto max_wait_us = static_cast<std::int64_t>(std::llround(config_.imu_max_wait_s * 1e6));
+    while (!held_.empty()) {
+      DepthEventSegment& segment = held_.front();
+      const std::int64_t end_us = segment.events.back().t_us;
+      const bool covered = imu_latest_us_ != kNoTime && imu_latest_us_ >= end_us;
+      const bool waited = newest_event_us_ - segment.events.front().t_us > max_wait_us;
+      if (!covered && !waited && !all) break;
+      if (!covered) {
+        imu_.uncovered_events += segment.events.size();
+        if (imu_uncovered_log_.due()) {
+          NODELET_WARN("%s: events processed without the gyro prior (%lu so far)",
+                       imu_latest_us_ == kNoTime
+                           ? "no IMU message yet"
+                           : "the IMU lags the events by more than ~imu_max_wait",
+                       static_cast<unsigned long>(imu_.uncovered_events));
+        }
+      }
+      processed_event_us_ = end_us;
+      processSegment(segment);
+      held_.pop_front();
+    }
+  }
+
+  struct ImuCounters {
+    std::uint64_t accepted = 0, rejected = 0, late = 0, uncovered_events = 0;
+  };
+  ros::Subscriber imu_sub_;
+  std::unique_ptr<tf2_ros::Buffer> imu_tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> imu_tf_listener_;
+  bool imu_rotation_known_ = false;
+  std::string imu_frame_;                      // frame_id of the first IMU message used
+  std::deque<ebslam::GyroSample> imu_recent_;  // the last second, replayed into a new filter
+  std::deque<DepthEventSegment> held_;         // events waiting for the IMU to cover them
+  std::int64_t imu_latest_us_ = kNoTime;       // newest IMU sample [us]
+  std::int64_t newest_event_us_ = kNoTime;     // newest event received [us]
+  std::int64_t processed_event_us_ = kNoTime;  // newest event processed [us]
+  ImuCounters imu_;
+  WallThrottle imu_reject_log_{kWarnPeriodS}, imu_late_log_{kWarnPeriodS},
+      imu_uncovered_log_{kWarnPeriodS}, imu_tf_log_{kWarnPeriodS};
+
+  // ---- end IMU ----
 
   EventSlam3dNodeConfig config_;
   Eigen::Isometry3d initial_base_ = Eigen::Isometry3d::Identity();  // base_link in map at start

@@ -57,6 +57,14 @@ ebslam::Ebslam3dConfig loadEbslam3dConfig(const ros::NodeHandle& nh,
   const int seed = param<int>(nh, "seed", static_cast<int>(c.seed));
   if (seed < 0) fail(nh, "seed", "must not be negative");
   c.seed = static_cast<std::uint64_t>(seed);
+  c.imu.gyro.noise_density = param<double>(nh, "gyro_noise_density", c.imu.gyro.noise_density);
+  c.imu.gyro.bias_random_walk =
+      param<double>(nh, "gyro_bias_random_walk", c.imu.gyro.bias_random_walk);
+  c.imu.gyro.initial_bias_std = param<double>(nh, "gyro_initial_bias", c.imu.gyro.initial_bias_std);
+  c.imu.sigma_rotation_per_sqrt_s =
+      param<double>(nh, "imu_sigma_rotation_time", c.imu.sigma_rotation_per_sqrt_s);
+  c.imu.bias_window_s = param<double>(nh, "imu_bias_window", c.imu.bias_window_s);
+  c.imu.estimate_bias = param<bool>(nh, "imu_estimate_bias", c.imu.estimate_bias);
   // The core names its fields; name the parameters where the mapping is not obvious.
   requirePositive(c.voxel_size_m, nh, "voxel_size");
   requirePositive(c.splat_lambda, nh, "splat_lambda");
@@ -104,6 +112,22 @@ EventSlam3dNodeConfig loadEventSlam3dNodeConfig(const ros::NodeHandle& nh) {
     fail(nh, "map_threshold", "must be a non-negative number");
   }
   requirePositive(config.map_publish_period_s, nh, "map_publish_period");
+  config.use_imu = param<bool>(nh, "use_imu", config.use_imu);
+  config.imu_rotation_from_tf =
+      param<bool>(nh, "imu_rotation_from_tf", config.imu_rotation_from_tf);
+  std::vector<double> rpy;
+  ebslam_ros_common::markParamRead(nh, "imu_rpy");
+  if (nh.getParam("imu_rpy", rpy)) {
+    if (rpy.size() != 3) fail(nh, "imu_rpy", "must be [roll, pitch, yaw] in radians");
+    for (double v : rpy) {
+      if (!std::isfinite(v)) fail(nh, "imu_rpy", "must hold finite numbers");
+    }
+    std::copy(rpy.begin(), rpy.end(), config.imu_rpy.begin());
+  } else if (nh.hasParam("imu_rpy")) {
+    fail(nh, "imu_rpy", "must be a list [roll, pitch, yaw]");
+  }
+  config.imu_max_wait_s = param<double>(nh, "imu_max_wait", config.imu_max_wait_s);
+  requirePositive(config.imu_max_wait_s, nh, "imu_max_wait");
   return config;
 }
 

@@ -11,7 +11,11 @@
 //  - ground_truth/pose (geometry_msgs/PoseStamped), ground_truth/path (nav_msgs/Path, bounded):
 //    the rig (the depth optical frame) in ~map_frame at each event message's end, and the tf
 //    ~map_frame -> ~ground_truth_frame;
-//  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+//  - /clock (with ~publish_clock; run the other nodes with use_sim_time);
+//  - imu (sensor_msgs/Imu in ~imu_frame, with ~publish_imu): the rig IMU's readings
+//    (ebslam/simulation/imu_simulator.h; angular velocity and linear acceleration with their
+//    noise densities as covariances, no orientation), each event message followed by the readings
+//    up to one past its end; the static tf ~edvs_frame -> ~imu_frame (rotation only).
 // With ~loop the rig drives ~t_begin..~t_end forth and back endlessly (odd passes backwards, pass k
 // seeded ~seed + k in the same room), the trajectory clock running on across passes.
 // Time: trajectory time t [s] is stamped anchor + (t - start), the anchor being ~clock_start
@@ -25,12 +29,15 @@
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/Imu.h>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 
 #include <ebslam/events/trajectory.h>
 #include <ebslam/simulation/dedvs_io.h>
 #include <ebslam/simulation/dedvs_scene.h>
 #include <ebslam/simulation/dedvs_simulator.h>
+#include <ebslam/simulation/imu_simulator.h>
 
 #include <algorithm>
 #include <atomic>
@@ -78,7 +85,9 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
         config_, config_.edvs_frame, config_.simulator.edvs.width, config_.simulator.edvs.height);
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
       publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
+      publishImu(t_end_s + 1.0 / config_.simulator.imu.rate_hz);
     });
+    if (config_.publish_imu) startImu(nh);
     NODELET_INFO("simulating the D-eDVS along '%s' from %.2f to %.2f s at %.2fx%s%s (%zu planes)",
                  config_.trajectory.c_str(), t_begin_ - path_.front().t_s,
                  t_end_ - path_.front().t_s, config_.speed,
@@ -133,6 +142,12 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
         ebslam::DedvsSimulatorConfig config = config_.simulator;
         config.seed += static_cast<std::uint64_t>(pass);
         config.events.seed += static_cast<std::uint64_t>(pass);
+        if (config_.publish_imu) {
+          ebslam::ImuSimulatorConfig imu = config.imu;
+          imu.seed += static_cast<std::uint64_t>(pass);
+          imu_readings_ = ebslam::simulateImu(pass_path_, t_begin_ + offset, pass_end_, imu);
+          next_imu_ = 0;
+        }
         const ebslam::DedvsRun result = ebslam::DedvsSimulator(config).simulate(
             scene_, pass_path_, t_begin_ + offset, pass_end_,
             [&](const std::vector<ebslam::TrueDepthEvent>& events) {
@@ -186,6 +201,52 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
     colour_info_pub_.publish(info);
   }
 
+  void startImu(ros::NodeHandle& nh) {
+    imu_pub_ = nh.advertise<sensor_msgs::Imu>("imu", 1000);
+    imu_tf_.emplace();
+    geometry_msgs::TransformStamped mount;
+    mount.header.stamp = ros::Time::now();
+    mount.header.frame_id = config_.edvs_frame;
+    mount.child_frame_id = config_.imu_frame;
+    const Eigen::Quaterniond q = ebslam::edvsFromImu(config_.simulator);
+    mount.transform.rotation.w = q.w();
+    mount.transform.rotation.x = q.x();
+    mount.transform.rotation.y = q.y();
+    mount.transform.rotation.z = q.z();
+    imu_tf_->sendTransform(mount);
+  }
+
+  // Readings of the current pass up to t_s [trajectory clock], stamped on the event clock.
+  void publishImu(double t_s) {
+    if (!config_.publish_imu) return;
+    const ebslam::ImuSimulatorConfig& c = config_.simulator.imu;
+    // White noise densities as per-reading variances (rate_hz sigma_density^2); the bias is not
+    // in them (it drifts; the gyro bias' std. dev. grows by the random walk).
+    const double gyro_var = c.gyro_noise_density * c.gyro_noise_density * c.rate_hz;
+    const double accel_var = c.accel_noise_density * c.accel_noise_density * c.rate_hz;
+    for (; next_imu_ < imu_readings_.size() && imu_readings_[next_imu_].t_s <= t_s; ++next_imu_) {
+      const ebslam::ImuReading& r = imu_readings_[next_imu_];
+      const std::int64_t t_us = std::llround(r.t_s * 1e6);
+      if (t_us <= last_imu_us_) continue;  // a pass starts where the previous one ended
+      last_imu_us_ = t_us;
+      sensor_msgs::Imu msg;
+      msg.header.stamp = events_->rosTime(t_us);
+      msg.header.frame_id = config_.imu_frame;
+      msg.orientation_covariance[0] = -1.0;  // no orientation estimate
+      msg.angular_velocity.x = r.gyro.x();
+      msg.angular_velocity.y = r.gyro.y();
+      msg.angular_velocity.z = r.gyro.z();
+      msg.linear_acceleration.x = r.accel.x();
+      msg.linear_acceleration.y = r.accel.y();
+      msg.linear_acceleration.z = r.accel.z();
+      for (int k = 0; k < 3; ++k) {
+        msg.angular_velocity_covariance[static_cast<std::size_t>(4 * k)] = gyro_var;
+        msg.linear_acceleration_covariance[static_cast<std::size_t>(4 * k)] = accel_var;
+      }
+      imu_pub_.publish(msg);
+    }
+  }
+
   void publishGroundTruth(double t_s, const ros::Time& stamp) {
     ground_truth_->publish(ebslam::interpolatePose(pass_path_, t_s), stamp,
                            events_->messages() % 10 == 0);
@@ -202,6 +263,11 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   ros::Publisher depth_pub_, depth_info_pub_, colour_pub_, colour_info_pub_;
   std::optional<PacedEventPublisher> events_;
   std::optional<GroundTruthPublisher> ground_truth_;
+  ros::Publisher imu_pub_;
+  std::optional<tf2_ros::StaticTransformBroadcaster> imu_tf_;
+  std::vector<ebslam::ImuReading> imu_readings_;  // of the pass being simulated
+  std::size_t next_imu_ = 0;
+  std::int64_t last_imu_us_ = std::numeric_limits<std::int64_t>::min();
   std::atomic<bool> stop_{false};
   std::thread worker_;
 };

@@ -63,6 +63,18 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   c.path_length = param<int>(nh, "path_length", c.path_length);
   if (c.path_length < 1) fail(nh, "path_length", "must be at least 1");
   c.write_calibration = param<std::string>(nh, "write_calibration", c.write_calibration);
+  c.publish_imu = param<bool>(nh, "publish_imu", c.publish_imu);
+  c.imu_frame = param<std::string>(nh, "imu_frame", c.imu_frame);
+  requireFrame(nh, "imu_frame", c.imu_frame);
+  ebslam::ImuSimulatorConfig& imu = c.simulator.imu;
+  imu.rate_hz = param<double>(nh, "imu_rate", imu.rate_hz);
+  requirePositive(imu.rate_hz, nh, "imu_rate");
+  imu.gyro_noise_density = param<double>(nh, "gyro_noise_density", imu.gyro_noise_density);
+  imu.gyro_bias_random_walk = param<double>(nh, "gyro_bias_random_walk", imu.gyro_bias_random_walk);
+  imu.gyro_initial_bias_std = param<double>(nh, "gyro_initial_bias", imu.gyro_initial_bias_std);
+  imu.accel_noise_density = param<double>(nh, "accel_noise_density", imu.accel_noise_density);
+  imu.seed = c.simulator.seed;
+  c.simulator.simulate_imu = false;  // the nodelet simulates the IMU per pass itself
   validateCore(nh, c.room);
   validateCore(nh, c.simulator);
   return c;

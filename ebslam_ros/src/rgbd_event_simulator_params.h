@@ -39,6 +39,13 @@ struct RgbdEventSimulatorNodeConfig {
   std::string ground_truth_frame = "ground_truth";         ///< ~ground_truth_frame: the rig
   int path_length = 10000;                                 ///< ~path_length
   std::string write_calibration;  ///< ~write_calibration: write the rig's sensors yaml there
+  /// ~publish_imu: publish the rig IMU's readings on `imu` (sensor_msgs/Imu in ~imu_frame) and
+  /// the static tf ~edvs_frame -> ~imu_frame. The IMU (simulator.imu, imu_simulator.h):
+  /// ~imu_rate [Hz], ~gyro_noise_density [rad/s/sqrt(Hz)], ~gyro_bias_random_walk
+  /// [rad/s/sqrt(s)], ~gyro_initial_bias [rad/s], ~accel_noise_density [m/s^2/sqrt(Hz)]; mounted
+  /// with REP 103 body axes on the depth camera; seeded by ~seed (+ the pass).
+  bool publish_imu = true;
+  std::string imu_frame = "imu_link";  ///< ~imu_frame
 };
 
 RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(

@@ -24,6 +24,7 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
 #include <CLI/CLI.hpp>
 
@@ -62,6 +63,7 @@ struct SessionOptions {
   int depth_width = 320;
   int box_count = 8;
   std::uint64_t seed = 1;
+  bool imu = true;  // dedvs: the rig IMU's readings on /imu (imu_simulator.h)
   std::string compression = "bz2";
 };
 
@@ -396,8 +398,11 @@ void writeSession(const SessionOptions& options) {
 // the offline tool sees the same events. Topics as live.launch records them from the real rig:
 // /edvs/events, /edvs/camera_info, /camera/depth_registered/image_raw (every frame, 30 Hz),
 // /camera/depth_registered/camera_info, /camera/rgb/image_rect_color and /camera/rgb/camera_info
-// (--rgb-rate), /ground_truth/pose (the eDVS optical frame in `world`, 100 Hz). No tf: the rig's
-// is the calibration's (the fusion publishes it), the map's is the SLAM's.
+// (--rgb-rate), /ground_truth/pose (the eDVS optical frame in `world`, 100 Hz), and unless --no-imu
+// /imu (sensor_msgs/Imu in imu_link, 200 Hz, the simulator's IMU seeded by --seed) with the static
+// tf edvs_optical_frame -> imu_link on /tf_static (its mounting; the playback's EventSlam3d looks
+// it up). No other tf: the rig's is the calibration's (the fusion publishes it), the map's is the
+// SLAM's.
 void writeDedvsSession(const SessionOptions& options) {
   ebslam::Trajectory rig = ebslam::readTumTrajectory(options.trajectory);
   if (rig.size() < 2) throw std::runtime_error("trajectory has fewer than two poses");
@@ -410,6 +415,8 @@ void writeDedvsSession(const SessionOptions& options) {
   config.seed = options.seed;
   config.events.seed = options.seed;
   config.depth.camera = config.depth.camera.scaled(options.depth_width / 320.0);
+  config.imu.seed = options.seed;
+  config.simulate_imu = options.imu;
   const ebslam::DedvsSimulator simulator(config);
 
   const std::string unordered_path = options.output + ".unordered";
@@ -469,16 +476,56 @@ void writeDedvsSession(const SessionOptions& options) {
     bag.write("/ground_truth/pose", msg.header.stamp, msg);
     ++ground_truth_poses;
   }
+  if (!run.imu.empty()) {
+    const ebslam::ImuSimulatorConfig& c = config.imu;
+    const double gyro_var = c.gyro_noise_density * c.gyro_noise_density * c.rate_hz;
+    const double accel_var = c.accel_noise_density * c.accel_noise_density * c.rate_hz;
+    for (const ebslam::ImuReading& r : run.imu) {
+      sensor_msgs::Imu msg;
+      msg.header.stamp = ros::Time(clock_origin_s + r.t_s);
+      msg.header.frame_id = "imu_link";
+      msg.orientation_covariance[0] = -1.0;  // no orientation
+      msg.angular_velocity.x = r.gyro.x();
+      msg.angular_velocity.y = r.gyro.y();
+      msg.angular_velocity.z = r.gyro.z();
+      msg.linear_acceleration.x = r.accel.x();
+      msg.linear_acceleration.y = r.accel.y();
+      msg.linear_acceleration.z = r.accel.z();
+      for (std::size_t k = 0; k < 3; ++k) {
+        msg.angular_velocity_covariance[4 * k] = gyro_var;  // white noise only
+        msg.linear_acceleration_covariance[4 * k] = accel_var;
+      }
+      bag.write("/imu", msg.header.stamp, msg);
+    }
+    tf2_msgs::TFMessage statics;
+    geometry_msgs::TransformStamped mount;
+    mount.header.stamp = ros::Time(clock_origin_s + options.t_begin_s);
+    mount.header.frame_id = edvs_frame;
+    mount.child_frame_id = "imu_link";
+    const Eigen::Quaterniond q = ebslam::edvsFromImu(config);
+    mount.transform.rotation.w = q.w();
+    mount.transform.rotation.x = q.x();
+    mount.transform.rotation.y = q.y();
+    mount.transform.rotation.z = q.z();
+    statics.transforms.push_back(mount);
+    auto header = boost::make_shared<std::map<std::string, std::string>>();
+    (*header)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
+    (*header)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
+    (*header)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
+    (*header)["latching"] = "1";
+    (*header)["callerid"] = "/make_session";
+    bag.write("/tf_static", mount.header.stamp, statics, header);
+  }
   bag.close();
   copyInTimeOrder(unordered_path, options);
   std::filesystem::remove(unordered_path);
   std::printf(
       "D-eDVS session %s: %.2f s, %zu events in %zu messages (%.0f events/s), %zu depth frames "
-      "and %zu colour frames %dx%d, %zu ground-truth poses, %zu scene planes\n",
+      "and %zu colour frames %dx%d, %zu ground-truth poses, %zu scene planes, %zu IMU readings\n",
       options.output.c_str(), t_end - options.t_begin_s, event_writer.events(),
       event_writer.messages(), event_writer.events() / std::max(1e-9, t_end - options.t_begin_s),
       depth_frames, colour_frames, depth_camera.width, depth_camera.height, ground_truth_poses,
-      scene.planes.size());
+      scene.planes.size(), run.imu.size());
 }
 
 }  // namespace
@@ -511,6 +558,7 @@ int main(int argc, char** argv) {
   app.add_option("--boxes", options.box_count, "boxes on the floor")->capture_default_str();
   app.add_option("--seed", options.seed, "seed of the room, events and depth noise")
       ->capture_default_str();
+  app.add_flag("!--no-imu", options.imu, "dedvs: no /imu topic (the rig IMU's readings)");
   app.add_option("--compression", options.compression, "bag compression")
       ->capture_default_str()
       ->check(CLI::IsMember({"none", "lz4", "bz2"}));

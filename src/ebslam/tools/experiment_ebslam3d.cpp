@@ -10,6 +10,9 @@
 //  - synthetic: synthetic_depth_events.h (a textured box room, geometric event model).
 // The path is a TUM ground truth (--groundtruth) or a synthesised hand-held motion (--motion,
 // handheld_motions.h; floor_sweep runs in a room without the table, which would stand above it).
+// --imu: the rig carries an IMU (imu_simulator.h, readings from the ground truth with noise and
+// bias, seeded by --scene-seed); the filter runs twice on the same events, without and with the
+// gyro rotation prior (Ebslam3dImuConfig), and prints one JSON line each ("imu": false / true).
 // --events-cache keeps the fused D-eDVS events of a (path, duration, scene seed) in a file, so
 // that runs differing only in the filter skip the simulation. --diagnostics writes one CSV row per
 // recorded estimate: tracking state, ESS, the fit, events used, the pose error before alignment.
@@ -37,6 +40,7 @@
 #include "ebslam/simulation/dedvs_scene.h"
 #include "ebslam/simulation/dedvs_simulator.h"
 #include "ebslam/simulation/handheld_motions.h"
+#include "ebslam/simulation/imu_simulator.h"
 #include "ebslam/simulation/synthetic_depth_events.h"
 #include "ebslam/slam/dedvs_fusion.h"
 #include "ebslam/slam/ebslam3d.h"
@@ -166,11 +170,14 @@ struct DiagnosticRow {
 };
 
 // Feeds the events to the filter in chunks of record_step_us of event time and records one
-// estimate per chunk; times the filter (thread CPU).
+// estimate per chunk; times the filter (thread CPU). With gyro readings, those up to one reading
+// past a chunk's end go in before the chunk (as a ROS node holding events until the IMU covers
+// them).
 class ChunkedRun {
  public:
-  ChunkedRun(const ebslam::Ebslam3dConfig& config, std::int64_t record_step_us)
-      : slam_(config), record_step_us_(record_step_us) {}
+  ChunkedRun(const ebslam::Ebslam3dConfig& config, std::int64_t record_step_us,
+             const std::vector<ebslam::ImuReading>* imu = nullptr)
+      : slam_(config), record_step_us_(record_step_us), imu_(imu) {}
 
   void add(const ebslam::PointEvent& e) {
     if (streamed_ == 0) first_us_ = e.t_us;
@@ -183,6 +190,17 @@ class ChunkedRun {
   void flush() {
     if (chunk_.empty()) return;
     const double c0 = threadCpuSeconds();
+    if (imu_) {
+      const std::int64_t until = chunk_.back().t_us;
+      while (next_imu_ < imu_->size()) {
+        const ebslam::ImuReading& r = (*imu_)[next_imu_];
+        const auto t_us = static_cast<std::int64_t>(std::llround(r.t_s * 1e6));
+        slam_.addGyro(t_us, r.gyro);
+        last_bias_ = r.gyro_bias;
+        ++next_imu_;
+        if (t_us >= until) break;
+      }
+    }
     slam_.process(chunk_);
     cpu_s_ += threadCpuSeconds() - c0;
     ebslam::StampedPose p;
@@ -199,6 +217,9 @@ class ChunkedRun {
   const std::vector<DiagnosticRow>& rows() const { return rows_; }
 
   const ebslam::EventSlam3d& slam() const { return slam_; }
+  bool withImu() const { return imu_ != nullptr; }
+  /// True gyro bias of the last reading given [rad/s].
+  const Eigen::Vector3d& lastTrueBias() const { return last_bias_; }
   const ebslam::Trajectory& estimate() const { return estimate_; }
   std::size_t streamed() const { return streamed_; }
   double cpuSeconds() const { return cpu_s_; }
@@ -213,6 +234,9 @@ class ChunkedRun {
   std::size_t streamed_ = 0;
   std::int64_t first_us_ = 0, last_us_ = 0;
   double cpu_s_ = 0.0;
+  const std::vector<ebslam::ImuReading>* imu_;
+  std::size_t next_imu_ = 0;
+  Eigen::Vector3d last_bias_ = Eigen::Vector3d::Zero();
 };
 
 // The final map's voxels above 1 as 'x y z value' lines.
@@ -254,6 +278,7 @@ struct RunSummary {
   std::string groundtruth, source, preset;
   std::uint64_t scene_seed = 0;
   std::size_t simulated = 0, without_depth = 0;
+  ebslam::ImuSimulatorConfig imu;
 };
 
 void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const ChunkedRun& run,
@@ -276,7 +301,7 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"evicted_chunks\": %llu, \"max_event_rate\": %g, \"sigma_position_per_sqrt_s\": %g, "
       "\"sigma_rotation_per_sqrt_s\": %g, \"lost_count\": %llu, \"time_lost_s\": %.3f, "
       "\"final_state\": \"%s\", \"diffusion_min_scale\": %g, \"diffusion_max_scale\": %g, "
-      "\"reference_angular_speed\": %g, \"reference_linear_speed\": %g}\n",
+      "\"reference_angular_speed\": %g, \"reference_linear_speed\": %g, ",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -290,6 +315,19 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       static_cast<unsigned long long>(slam.health().lost_count), slam.health().time_lost_s,
       ebslam::toString(slam.health().state), config.diffusion_min_scale, config.diffusion_max_scale,
       config.reference_angular_speed, config.reference_linear_speed);
+  const ebslam::GyroPrior& gyro = slam.gyro();
+  std::printf(
+      "\"imu\": %s, \"imu_rate_hz\": %g, \"gyro_noise_density\": %g, "
+      "\"gyro_bias_random_walk\": %g, \"imu_sigma_rotation_per_sqrt_s\": %g, "
+      "\"imu_bias_window_s\": %g, \"gyro_predicted_batches\": %llu, "
+      "\"gyro_uncovered_batches\": %llu, \"gyro_bias_error_rad_s\": %.5f, "
+      "\"gyro_bias_true_rad_s\": %.5f}\n",
+      run.withImu() ? "true" : "false", r.imu.rate_hz, r.imu.gyro_noise_density,
+      r.imu.gyro_bias_random_walk, config.imu.sigma_rotation_per_sqrt_s, config.imu.bias_window_s,
+      static_cast<unsigned long long>(slam.gyroPredictedBatches()),
+      static_cast<unsigned long long>(slam.gyroUncoveredBatches()),
+      run.withImu() ? (gyro.bias() - run.lastTrueBias()).norm() : 0.0, run.lastTrueBias().norm());
+  std::fflush(stdout);
 }
 
 }  // namespace
@@ -362,6 +400,29 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--noise-share", sim.noise_share, "synthetic noise events per edge event")
       ->capture_default_str();
+  bool use_imu = false, imu_only = false;
+  ImuSimulatorConfig imu_sim;
+  app.add_flag("--imu", use_imu,
+               "simulate the rig's IMU and run the filter without and with the gyro prior "
+               "(two JSON lines)");
+  app.add_flag("--imu-only", imu_only, "with --imu: only the run with the gyro prior");
+  app.add_option("--imu-rate", imu_sim.rate_hz, "IMU readings per second [Hz]")
+      ->capture_default_str();
+  app.add_option("--gyro-noise", imu_sim.gyro_noise_density,
+                 "gyro white noise density [rad/s/sqrt(Hz)] (simulated and assumed)")
+      ->capture_default_str();
+  app.add_option("--gyro-bias-walk", imu_sim.gyro_bias_random_walk,
+                 "gyro bias random walk [rad/s per sqrt(s)] (simulated and assumed)")
+      ->capture_default_str();
+  app.add_option("--gyro-initial-bias", imu_sim.gyro_initial_bias_std,
+                 "std. dev. of the simulated turn-on bias per axis [rad/s]")
+      ->capture_default_str();
+  app.add_option("--imu-sigma-rotation-time", config.imu.sigma_rotation_per_sqrt_s,
+                 "rotation diffusion kept besides the gyro's noise [rad / sqrt(s)]")
+      ->capture_default_str();
+  app.add_option("--imu-bias-window", config.imu.bias_window_s,
+                 "window of the bias measurements [s of event time]")
+      ->capture_default_str();
   app.add_option("-o,--trajectory", trajectory_out, "estimated path (TUM)");
   app.add_option("--aligned-truth", truth_out, "CSV of per-pose errors and aligned positions");
   app.add_option("--map-xyz", map_out, "final map voxels above 1 as 'x y z value' lines");
@@ -379,6 +440,7 @@ int main(int argc, char** argv) {
     const Ebslam3dConfig given = config;
     config = base;
     config.seed = given.seed;
+    config.imu = given.imu;  // the presets leave the IMU part at its defaults
     if (n_opt->count()) config.num_particles = given.num_particles;
     if (k_opt->count()) config.resample_every = given.resample_every;
     if (b_opt->count()) config.batch_size = given.batch_size;
@@ -407,17 +469,33 @@ int main(int argc, char** argv) {
     if (truth.size() < 2) throw std::runtime_error("ground truth has fewer than two poses");
     const bool with_table = motion != "floor_sweep";
 
-    RunSummary summary{groundtruth, source, preset, scene_seed};
+    RunSummary summary{groundtruth, source, preset, scene_seed, 0, 0, {}};
     const auto record_step_us = static_cast<std::int64_t>(record_every_s * 1e6);
     std::unique_ptr<ChunkedRun> run;
-    const PointSink sink = [&](const PointEvent& e) { run->add(e); };
+    PointEventVector held;  // with --imu: the events, for the two runs
+    const PointSink sink = [&](const PointEvent& e) {
+      if (use_imu) {
+        held.push_back(e);
+      } else {
+        run->add(e);
+      }
+    };
     Trajectory sensor_truth;
+    // The IMU's body (rig) path and span, and its frame -> the tracked sensor's.
+    const Trajectory* imu_body = &truth;
+    double imu_t0 = 0.0, imu_t1 = 0.0;
+    Eigen::Quaterniond sensor_from_imu = imu_sim.body_from_imu;
+    imu_sim.seed = scene_seed;
     if (source == "dedvs") {
       const double t0 = truth.front().t_s;
       for (StampedPose& pose : truth) pose.t_s -= t0;
       const double t1 =
           duration_s > 0.0 ? std::min(truth.back().t_s, duration_s) : truth.back().t_s;
       config.focal_px = DedvsSimulatorConfig{}.edvs.focal_px;
+      DedvsSimulatorConfig rig;
+      rig.imu = imu_sim;
+      sensor_from_imu = edvsFromImu(rig);
+      imu_t1 = t1;
       run = std::make_unique<ChunkedRun>(config, record_step_us);
       PointEventVector cached;
       if (!events_cache.empty() &&
@@ -442,24 +520,49 @@ int main(int argc, char** argv) {
       sim.seed = scene_seed;
       const auto scene = makeSyntheticRoom(truth, room);
       const PointEventVector events = simulateDepthEvents(scene, sensor, truth, t0, t1, sim);
+      imu_t0 = t0;
+      imu_t1 = t1;
       run = std::make_unique<ChunkedRun>(config, record_step_us);
       summary.simulated = events.size();
       for (const PointEvent& e : events) sink(e);
       sensor_truth = truth;
     }
-    run->flush();
-    if (run->streamed() == 0) throw std::runtime_error("no events");
-    if (run->estimate().size() < 3) throw std::runtime_error("too few events for an estimate");
+    // The runs: one, or without and with the gyro prior on the same events.
+    std::vector<ImuReading> imu_readings;
+    std::vector<std::unique_ptr<ChunkedRun>> runs;
+    if (use_imu) {
+      summary.imu = imu_sim;
+      imu_readings = simulateImu(*imu_body, imu_t0, imu_t1, imu_sim);
+      config.imu.gyro.sensor_from_imu = sensor_from_imu;
+      config.imu.gyro.noise_density = imu_sim.gyro_noise_density;
+      config.imu.gyro.bias_random_walk = imu_sim.gyro_bias_random_walk;
+      if (!imu_only) runs.push_back(std::make_unique<ChunkedRun>(config, record_step_us));
+      runs.push_back(std::make_unique<ChunkedRun>(config, record_step_us, &imu_readings));
+      for (std::unique_ptr<ChunkedRun>& r : runs) {
+        for (const PointEvent& e : held) r->add(e);
+      }
+    } else {
+      summary.imu.rate_hz = 0.0;
+      runs.push_back(std::move(run));
+    }
     TrajectoryEvaluationConfig eval_config;
     eval_config.max_time_offset_s = 0.2;
     eval_config.estimate_body_rotation = false;
-    const TrajectoryEvaluation eval =
-        evaluateTrajectory(run->estimate(), sensor_truth, eval_config);
-    if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, run->estimate());
-    if (!truth_out.empty()) writeTrajectoryErrorsCsv(truth_out, eval);
-    if (!map_out.empty()) writeMapXyz(map_out, run->slam());
-    if (!diagnostics_out.empty()) writeDiagnostics(diagnostics_out, *run, sensor_truth);
-    printJson(summary, config, *run, eval);
+    for (std::unique_ptr<ChunkedRun>& r : runs) {
+      r->flush();
+      if (r->streamed() == 0) throw std::runtime_error("no events");
+      if (r->estimate().size() < 3) throw std::runtime_error("too few events for an estimate");
+      const TrajectoryEvaluation eval =
+          evaluateTrajectory(r->estimate(), sensor_truth, eval_config);
+      // Files: of the last run (the one with the gyro prior under --imu).
+      if (r == runs.back()) {
+        if (!trajectory_out.empty()) writeTumTrajectory(trajectory_out, r->estimate());
+        if (!truth_out.empty()) writeTrajectoryErrorsCsv(truth_out, eval);
+        if (!map_out.empty()) writeMapXyz(map_out, r->slam());
+        if (!diagnostics_out.empty()) writeDiagnostics(diagnostics_out, *r, sensor_truth);
+      }
+      printJson(summary, config, *r, eval);
+    }
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

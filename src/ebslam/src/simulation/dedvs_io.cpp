@@ -124,6 +124,16 @@ void writeDedvsRun(const std::string& directory, const DedvsRun& run, const Dedv
   writeTumTrajectory((fs::path(directory) / "edvs_groundtruth.txt").string(),
                      run.edvs_ground_truth);
   writeDedvsSensors((fs::path(directory) / "sensors.yaml").string(), sensors);
+  if (!run.imu.empty()) {
+    std::ofstream imu((fs::path(directory) / "imu.txt").string());
+    imu << "# t_s gyro_x gyro_y gyro_z [rad/s] accel_x accel_y accel_z [m/s^2], IMU frame\n";
+    imu.precision(9);
+    for (const ImuReading& r : run.imu) {
+      imu << r.t_s << ' ' << r.gyro.x() << ' ' << r.gyro.y() << ' ' << r.gyro.z() << ' '
+          << r.accel.x() << ' ' << r.accel.y() << ' ' << r.accel.z() << '\n';
+    }
+    if (!imu) fail("writeDedvsRun: cannot write imu.txt in " + directory);
+  }
 }
 
 DedvsRun readDedvsRun(const std::string& directory, DedvsSensors* sensors) {
@@ -155,6 +165,19 @@ DedvsRun readDedvsRun(const std::string& directory, DedvsSensors* sensors) {
       readTumTrajectory((fs::path(directory) / "edvs_groundtruth.txt").string());
   if (sensors != nullptr)
     *sensors = readDedvsSensors((fs::path(directory) / "sensors.yaml").string());
+  std::ifstream imu((fs::path(directory) / "imu.txt").string());  // optional
+  while (imu && std::getline(imu, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    ImuReading r;
+    if (!(fields >> r.t_s >> r.gyro.x() >> r.gyro.y() >> r.gyro.z() >> r.accel.x() >> r.accel.y() >>
+          r.accel.z()) ||
+        !r.gyro.allFinite() || !r.accel.allFinite() ||
+        (!run.imu.empty() && !(r.t_s > run.imu.back().t_s))) {
+      fail("readDedvsRun: malformed or out-of-order line in imu.txt: " + line);
+    }
+    run.imu.push_back(r);
+  }
   return run;
 }
 

@@ -140,6 +140,7 @@ void DedvsSimulatorConfig::validate() const {
           "DedvsSimulatorConfig: ground_truth_rate_hz must be positive");
   require(std::isfinite(illumination) && illumination > 0.0,
           "DedvsSimulatorConfig: illumination must be positive");
+  imu.validate();
 }
 
 double depthNoiseSigma(const DepthCameraConfig& config, double z_m) {
@@ -590,7 +591,13 @@ DedvsRun DedvsSimulator::simulate(const Scene& scene, const Trajectory& rig_traj
     run.edvs_ground_truth.push_back(
         StampedPose::fromIsometry(t_end_s, pose * config_.depth_from_edvs));
   }
+  if (config_.simulate_imu) run.imu = simulateImu(rig_trajectory, t_begin_s, t_end_s, config_.imu);
   return run;
+}
+
+Eigen::Quaterniond edvsFromImu(const DedvsSimulatorConfig& config) {
+  const Eigen::Quaterniond depth_from_edvs(config.depth_from_edvs.linear());
+  return (depth_from_edvs.conjugate() * config.imu.body_from_imu).normalized();
 }
 
 }  // namespace ebslam

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -86,6 +87,15 @@ void Ebslam3dConfig::validate() const {
   if (!(min_range_m >= 0.0) || !positive(max_range_m) || !(min_range_m < max_range_m)) {
     fail("need 0 <= min_range_m < max_range_m (finite)");
   }
+  try {
+    imu.gyro.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("imu: ") + e.what());
+  }
+  if (!(imu.sigma_rotation_per_sqrt_s >= 0.0 && imu.sigma_rotation_per_sqrt_s < 10.0)) {
+    fail("imu.sigma_rotation_per_sqrt_s must be in [0, 10)");
+  }
+  if (!positive(imu.bias_window_s)) fail("imu.bias_window_s must be positive");
   VoxelMapConfig map;
   map.voxel_size_m = voxel_size_m;
   map.max_memory_bytes = max_map_bytes;
@@ -289,6 +299,17 @@ float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const Chunke
   return best;
 }
 
+void ParticleSet3D::rotateBody(const Eigen::Quaternionf& delta) {
+  const float dw = delta.w(), dx = delta.x(), dy = delta.y(), dz = delta.z();
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const float w = qw_[i], qx = qx_[i], qy = qy_[i], qz = qz_[i];
+    qw_[i] = w * dw - qx * dx - qy * dy - qz * dz;
+    qx_[i] = w * dx + qx * dw + qy * dz - qz * dy;
+    qy_[i] = w * dy - qx * dz + qy * dw + qz * dx;
+    qz_[i] = w * dz + qx * dy - qy * dx + qz * dw;
+  }
+}
+
 bool ParticleSet3D::resampleSystematic() {
   std::vector<double>& w = scores_.stored();
   const std::size_t n = w.size();
@@ -338,7 +359,7 @@ VoxelMapConfig mapConfig(const Ebslam3dConfig& c) {
 }  // namespace
 
 EventSlam3d::EventSlam3d(const Ebslam3dConfig& config, const Pose3& start)
-    : config_(config), map_(mapConfig(config)) {
+    : config_(config), map_(mapConfig(config)), gyro_(config.imu.gyro) {
   for (int b = 1; b <= config_.batch_size; ++b) {
     batch_decay_.push_back(batchDecay(config_.score_alpha, b));
   }
@@ -364,6 +385,8 @@ void EventSlam3d::reset(const Pose3& start) {
   health_started_ = false;
   above_recover_s_ = 0.0;
   last_t_us_ = std::numeric_limits<std::int64_t>::min();
+  gyro_prev_set_ = false;  // gyro samples and bias are kept: they belong to the sensor
+  bias_ref_set_ = false;
 }
 
 void EventSlam3d::setConfig(const Ebslam3dConfig& config) {
@@ -377,6 +400,7 @@ void EventSlam3d::setConfig(const Ebslam3dConfig& config) {
   std::vector<BatchDecay> decay;
   for (int b = 1; b <= config.batch_size; ++b) decay.push_back(batchDecay(config.score_alpha, b));
   config_ = config;
+  gyro_.setConfig(config_.imu.gyro);
   batch_decay_ = std::move(decay);
   // process() leaves no partial batch behind, so in_batch_ is 0 here.
   since_resample_ = std::min(since_resample_, config_.resample_every - 1);
@@ -458,12 +482,17 @@ void EventSlam3d::runBatch(int b) {
   const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
   const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
   const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
-  const float best = particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
-                                     static_cast<float>(std::sqrt(var_r)), batch_decay_[b - 1]);
+  // Gyro rotation prior: rotates the particles; the rotation diffusion around it (var_r without).
+  const double var_r_batch =
+      applyGyroPrior(var_r, b * config_.sigma_rotation_rad * config_.sigma_rotation_rad);
+  const float best =
+      particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
+                      static_cast<float>(std::sqrt(var_r_batch)), batch_decay_[b - 1]);
   updateHealth(best, b, dt_s);
   processed_ += static_cast<std::uint64_t>(b);
   since_resample_ += b;
   expected_ = particles_.weightedMean();
+  updateGyroBias();
   updateMotion();
   // Mapping (eq. 8.9).
   if (config_.splat == MapSplat3d::kExpectedPose) {
@@ -570,6 +599,56 @@ void EventSlam3d::splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& 
       point.norm() / static_cast<float>(2.0 * config_.splat_lambda * config_.focal_px);
   map_.addGaussian(q * point + t, sigma, weight);
 }
+
+// ---- Gyro rotation prior ----
+
+GyroPrior::AddResult EventSlam3d::addGyro(std::int64_t t_us, const Eigen::Vector3d& rate_imu) {
+  if (!config_.imu.enabled) return GyroPrior::AddResult::kAccepted;  // ignored by configuration
+  return gyro_.add(t_us, rate_imu);
+}
+
+double EventSlam3d::applyGyroPrior(double fallback_var, double per_event_var) {
+  if (!config_.imu.enabled || gyro_.empty()) return fallback_var;  // no IMU: unchanged
+  const std::int64_t t1 = batch_end_us_;
+  const std::int64_t t0 = gyro_prev_us_;
+  const bool have_t0 = gyro_prev_set_;
+  gyro_prev_set_ = true;
+  gyro_prev_us_ = t1;
+  const std::optional<Eigen::Quaterniond> delta =
+      have_t0 ? gyro_.deltaRotation(t0, t1) : std::nullopt;
+  if (!delta) {
+    ++gyro_uncovered_;
+    return fallback_var;
+  }
+  ++gyro_predicted_;
+  particles_.rotateBody(delta->cast<float>());
+  const double dt_s = 1e-6 * static_cast<double>(t1 - t0);
+  const double s = config_.imu.sigma_rotation_per_sqrt_s;
+  return per_event_var + s * s * dt_s + gyro_.rotationVariance(dt_s, t1);
+}
+
+void EventSlam3d::updateGyroBias() {
+  if (!config_.imu.enabled || gyro_.empty()) return;
+  if (config_.imu.estimate_bias) {
+    // Windows of the filter's own rotation while it tracks; a window restarts after a loss.
+    if (health_.state != TrackingState::kTracking) {
+      bias_ref_set_ = false;
+    } else if (!bias_ref_set_) {
+      bias_ref_set_ = true;
+      bias_ref_us_ = batch_end_us_;
+      bias_ref_orientation_ = expected_.orientation;
+    } else if (1e-6 * static_cast<double>(batch_end_us_ - bias_ref_us_) >=
+               config_.imu.bias_window_s) {
+      gyro_.updateBias(bias_ref_us_, batch_end_us_,
+                       bias_ref_orientation_.conjugate() * expected_.orientation);
+      bias_ref_us_ = batch_end_us_;
+      bias_ref_orientation_ = expected_.orientation;
+    }
+  }
+  gyro_.discardBefore(bias_ref_set_ ? std::min(bias_ref_us_, gyro_prev_us_) : gyro_prev_us_);
+}
+
+// ---- end gyro rotation prior ----
 
 std::size_t EventSlam3d::memoryBytes() const {
   return map_.memoryBytes() + static_cast<std::size_t>(config_.num_particles) *

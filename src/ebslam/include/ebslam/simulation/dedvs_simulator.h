@@ -19,6 +19,7 @@
 #include "ebslam/events/event.h"
 #include "ebslam/events/trajectory.h"
 #include "ebslam/simulation/event_model.h"
+#include "ebslam/simulation/imu_simulator.h"
 #include "ebslam/simulation/simulator.h"
 #include "ebslam/slam/camera_model.h"
 #include "ebslam/slam/dedvs_sensors.h"
@@ -77,7 +78,11 @@ struct DedvsSimulatorConfig {
   double ground_truth_rate_hz = 200.0;
   /// eDVS irradiance scale: intensity = texture * illumination (and the LED's).
   double illumination = 1.0;
-  std::uint64_t seed = 1;  ///< depth noise and holes; events use events.seed
+  /// The rig's IMU (imu_simulator.h): its body is the rig (depth optical frame), body_from_imu
+  /// its mounting; readings on the trajectory clock (= the event clock), seeded by imu.seed.
+  ImuSimulatorConfig imu;
+  bool simulate_imu = true;  ///< false: DedvsRun::imu stays empty
+  std::uint64_t seed = 1;    ///< depth noise and holes; events use events.seed
 
   static CameraModel defaultEdvsCamera();
   static Eigen::Isometry3d defaultDepthFromEdvs();
@@ -107,6 +112,8 @@ struct DedvsRun {
   std::vector<DepthFrame> depth_frames;
   Trajectory rig_ground_truth;   ///< depth optical frame -> world at ground_truth_rate_hz
   Trajectory edvs_ground_truth;  ///< eDVS optical frame -> world, same times
+  /// IMU readings over [t_begin, t_end] (config.imu; empty unless simulate_imu).
+  std::vector<ImuReading> imu;
   std::size_t signal_events = 0;
   std::size_t noise_events = 0;
   std::size_t render_steps = 0;
@@ -166,6 +173,10 @@ class DedvsSimulator {
  private:
   DedvsSimulatorConfig config_;
 };
+
+/// The rig IMU's frame -> the eDVS optical frame (the rotation EB-SLAM-3D's gyro prior needs):
+/// depth_from_edvs^-1 * imu.body_from_imu.
+Eigen::Quaterniond edvsFromImu(const DedvsSimulatorConfig& config);
 
 /// Standard deviation of the depth camera's depth [m] at depth z from the disparity model
 /// (noise and quantisation): sqrt(sigma_d^2 + q^2 / 12) z^2 / (f_ir b), q = 1 / subpixel_steps.

@@ -18,6 +18,7 @@
 #include "ebslam/events/pose.h"
 #include "ebslam/slam/exponential_decay.h"
 #include "ebslam/slam/fast_normal_generator.h"
+#include "ebslam/slam/gyro_prior.h"
 #include "ebslam/slam/tracking_state.h"
 #include "ebslam/slam/voxel_map.h"
 
@@ -59,6 +60,23 @@ struct TrackingHealth {
   double fit_ratio = 1.0;  ///< fit_fast / fit_slow (1 while fit_slow is 0)
   std::uint64_t lost_count = 0;  ///< transitions into kLost since the (re)start
   double time_lost_s = 0.0;      ///< [s of event time] spent lost since the (re)start
+};
+
+/// Gyro rotation prior (used once EventSlam3d::addGyro has delivered samples; without them the
+/// filter is unchanged). Each batch, every particle is rotated by the gyro's bias-corrected
+/// rotation since the previous batch and the rotation diffusion becomes the gyro's remaining
+/// uncertainty: variance (sigma_rotation_per_sqrt_s^2 + noise_density^2) dt + bias variance dt^2
+/// (dt uncapped, no speed scaling; the per-event part stays). Batches the samples do not cover
+/// fall back to the usual diffusion. The bias is estimated from the filter's own rotation over
+/// windows of bias_window_s while tracking. Details: docs/ebslam_core.md#eb-slam-3d-imu
+struct Ebslam3dImuConfig {
+  bool enabled = true;  ///< false: samples are ignored
+  GyroPriorConfig gyro;
+  /// Rotation diffusion kept besides the gyro's own noise [rad / sqrt(s) of event time]: room
+  /// for the map to correct calibration and model errors.
+  double sigma_rotation_per_sqrt_s = 0.1;
+  bool estimate_bias = true;
+  double bias_window_s = 0.5;  ///< [s of event time]
 };
 
 struct Ebslam3dConfig {
@@ -107,6 +125,7 @@ struct Ebslam3dConfig {
   std::size_t max_map_bytes = 24u << 20;
   MapSplat3d splat = MapSplat3d::kExpectedPose;
   TrackingHealthConfig health;
+  Ebslam3dImuConfig imu;
   std::uint64_t seed = 1;  ///< seeds the diffusion noise and the resampling
 
   /// This project's default preset: N 100, B 3, K 10, 2 cm voxels, at most 60k events/s, diffusion
@@ -147,6 +166,8 @@ class ParticleSet3D {
              float sigma_position, float sigma_rotation, const BatchDecay& decay);
   /// Effective sample size of the normalised scores over N, (0, 1] (1 if the total is zero).
   double essShare() const;
+  /// Rotates every particle by `delta` in its own (sensor) frame: q <- q delta.
+  void rotateBody(const Eigen::Quaternionf& delta);
   /// Systematic resampling (children keep their parent's score, as in EB-SLAM-2D). Returns
   /// false (and does nothing) when the total score is zero or not finite.
   bool resampleSystematic();
@@ -178,6 +199,17 @@ class EventSlam3d {
   ProcessStats process(const PointEventVector& events) {
     return process(events.data(), events.size());
   }
+
+  /// Gyro reading for the rotation prior (Ebslam3dImuConfig): mean rate over the interval ending
+  /// at t_us (event clock) in the IMU frame [rad/s]. Give samples ahead of the events they
+  /// cover (a batch not covered falls back to the usual diffusion). Rejected samples (non-finite,
+  /// saturated, not after the previous) change nothing; see GyroPrior::AddResult.
+  GyroPrior::AddResult addGyro(std::int64_t t_us, const Eigen::Vector3d& rate_imu);
+  /// The gyro integrator (bias estimate, samples).
+  const GyroPrior& gyro() const { return gyro_; }
+  /// Batches rotated by the gyro / left to the usual diffusion although samples had arrived.
+  std::uint64_t gyroPredictedBatches() const { return gyro_predicted_; }
+  std::uint64_t gyroUncoveredBatches() const { return gyro_uncovered_; }
 
   /// Restarts with an empty map and all particles at `start` (the time order starts afresh).
   void reset(const Pose3& start = {});
@@ -248,6 +280,21 @@ class EventSlam3d {
   std::uint64_t rejected_ = 0;
   int since_resample_ = 0;
   std::int64_t last_t_us_;
+
+  // ---- Gyro rotation prior (Ebslam3dImuConfig) ----
+  // Rotates the particles by the gyro's rotation since the previous batch; returns the rotation
+  // variance to diffuse with, or `fallback` when the samples do not cover the batch.
+  double applyGyroPrior(double fallback_var, double per_event_var);
+  void updateGyroBias();
+  GyroPrior gyro_;
+  bool gyro_prev_set_ = false;
+  std::int64_t gyro_prev_us_ = 0;  // end of the previous batch the prior saw [us]
+  bool bias_ref_set_ = false;
+  std::int64_t bias_ref_us_ = 0;             // start of the bias window [us]
+  Eigen::Quaterniond bias_ref_orientation_;  // estimate at its start
+  std::uint64_t gyro_predicted_ = 0;
+  std::uint64_t gyro_uncovered_ = 0;
+  // ---- end gyro rotation prior ----
 };
 
 }  // namespace ebslam
