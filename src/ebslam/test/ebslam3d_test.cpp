@@ -314,8 +314,8 @@ TEST(EventSlam3d, DiffusionShrinksWithTheEstimatesSpeed) {
   const double fixed = spread(1.0, &fixed_speed);
   const double scaled = spread(0.1, &scaled_speed);
   EXPECT_NEAR(fixed, 0.05 * 0.05, 0.1 * 0.05 * 0.05);
-  // Scale 1 for the first 0.25 s window, then decaying towards 0.1 (smoothing 0.25 s): about a
-  // third of the variance, and well above the floor's 0.01.
+  // Scale 1 until the first two 50 ms windows have a mean each, then decaying towards 0.1
+  // (smoothing 0.25 s): a fraction of the variance, and well above the floor's 0.01.
   EXPECT_LT(scaled, 0.5 * fixed);
   EXPECT_GT(scaled, 0.2 * fixed);
   EXPECT_LT(scaled_speed, 0.1);  // [rad/s]: the weighted mean of 4000 walks barely moves

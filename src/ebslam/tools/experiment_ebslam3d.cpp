@@ -397,7 +397,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"last_relocalisation_s\": %.3f, \"false_alarm_share\": %.4f, \"miss_share\": %.4f, "
       "\"lost_share\": %.4f, \"cover_at_s\": %g, \"cover_for_s\": %g, \"covered_events\": %zu, "
       "\"cover_noticed\": %s, \"cover_recovery_s\": %.3f, \"memory_first_minute_mib\": %.3f, "
-      "\"memory_end_mib\": %.3f, \"memory_growth_mib_per_min\": %.4f, \"keyframes\": %zu}\n",
+      "\"memory_end_mib\": %.3f, \"memory_growth_mib_per_min\": %.4f, \"keyframes\": %zu, "
+      "\"motion_window_s\": %g, \"velocity_prediction\": %g, \"ray_min_depthless_share\": %g}\n",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -419,7 +420,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       states.lost_share, r.cover_at_s, r.cover_for_s, r.covered,
       states.cover_noticed ? "true" : "false", states.cover_recovery_s,
       states.memory_first_minute_mib, states.memory_end_mib, states.memory_growth_mib_per_min,
-      slam.keyframes().size());
+      slam.keyframes().size(), config.motion_window_s, config.velocity_prediction,
+      config.rays.min_depthless_share);
 }
 
 }  // namespace
@@ -482,6 +484,11 @@ int main(int argc, char** argv) {
                                   "linear speed of diffusion scale 1 [m/s]");
   auto* window_opt = app.add_option("--motion-window", config.motion_window_s,
                                     "window of the speed measure [s of event time]");
+  auto* velocity_opt = app.add_option("--velocity-prediction", config.velocity_prediction,
+                                      "share of the estimate's velocity predicted per batch");
+  auto* ray_share_opt =
+      app.add_option("--ray-min-depthless-share", config.rays.min_depthless_share,
+                     "score rays only while this share of the events has no depth (0 = always)");
   auto* lost_fit_opt =
       app.add_option("--lost-fit", config.health.lost_fit, "tracking state: lost below this fit");
   auto* recover_fit_opt = app.add_option("--recover-fit", config.health.recover_fit,
@@ -542,6 +549,10 @@ int main(int argc, char** argv) {
     if (wref_opt->count()) config.reference_angular_speed = given.reference_angular_speed;
     if (vref_opt->count()) config.reference_linear_speed = given.reference_linear_speed;
     if (window_opt->count()) config.motion_window_s = given.motion_window_s;
+    if (velocity_opt->count()) config.velocity_prediction = given.velocity_prediction;
+    if (ray_share_opt->count()) {
+      config.rays.min_depthless_share = given.rays.min_depthless_share;
+    }
     if (lost_fit_opt->count()) config.health.lost_fit = given.health.lost_fit;
     if (recover_fit_opt->count()) config.health.recover_fit = given.health.recover_fit;
     if (fit_time_opt->count()) config.health.fast_time_s = given.health.fast_time_s;

@@ -81,6 +81,9 @@ void Ebslam3dConfig::validate() const {
   if (!positive(motion_window_s) || !positive(motion_time_s)) {
     fail("motion_window_s and motion_time_s must be positive");
   }
+  if (!(velocity_prediction >= 0.0 && velocity_prediction <= 1.0)) {
+    fail("velocity_prediction must be in [0, 1]");
+  }
   if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
       !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
       !std::isfinite(health.warmup_s)) {
@@ -93,6 +96,10 @@ void Ebslam3dConfig::validate() const {
   if (!(health.min_surface_value > 0.0) || !std::isfinite(health.min_surface_value) ||
       !(health.sample_interval_s >= 0.0) || !std::isfinite(health.sample_interval_s)) {
     fail("health: need a positive min_surface_value and a finite sample_interval_s >= 0");
+  }
+  if (!(rays.min_depthless_share >= 0.0 && rays.min_depthless_share <= 1.0) ||
+      !positive(rays.share_time_s)) {
+    fail("rays: need min_depthless_share in [0, 1] and a positive share_time_s");
   }
   if (!positive(rays.max_depth_m) || !(rays.min_map_value >= 0.0) ||
       !std::isfinite(rays.min_map_value) || !(rays.weight >= 0.0) || !std::isfinite(rays.weight)) {
@@ -175,6 +182,20 @@ void ParticleSet3D::assign(const std::vector<Pose3>& poses) {
   scores_.assign(count, 1.0);
   scratch_.resize(count * 22);
   scratch_w_.resize(count);
+}
+
+void ParticleSet3D::predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation) {
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const Eigen::Quaternionf q =
+        (Eigen::Quaternionf(qw_[i], qx_[i], qy_[i], qz_[i]) * dq).normalized();
+    qw_[i] = q.w();
+    qx_[i] = q.x();
+    qy_[i] = q.y();
+    qz_[i] = q.z();
+    x_[i] += translation.x();
+    y_[i] += translation.y();
+    z_[i] += translation.z();
+  }
 }
 
 std::vector<int> ParticleSet3D::best(int count) const {
@@ -476,6 +497,7 @@ void EventSlam3d::reset(const Pose3& start) {
   reseed_rng_state_ = config_.seed ^ 0x9e3779b97f4a7c15ULL;
   rays_scored_ = 0;
   rays_unscored_ = 0;
+  share_started_ = false;
   last_t_us_ = std::numeric_limits<std::int64_t>::min();
 }
 
@@ -515,20 +537,26 @@ EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::si
   for (std::size_t i = 0; i < count; ++i) {
     const Eigen::Vector3f& p = events[i].point;
     const float r2 = p.squaredNorm();  // NaN for a non-finite point, which fails both tests
-    if (events[i].has_depth) {
-      if (!(r2 >= min_r2 && r2 <= max_r2)) {
-        ++stats.rejected;
-        continue;
-      }
-    } else {
-      if (!(r2 >= 0.81f && r2 <= 1.21f)) {  // a ray must be a unit vector (within 10 %)
-        ++stats.rejected;
-        continue;
-      }
-      if (!config_.rays.enabled) {
-        ++stats.rays_unscored;
-        continue;
-      }
+    const bool valid = events[i].has_depth ? (r2 >= min_r2 && r2 <= max_r2)
+                                           : (r2 >= 0.81f && r2 <= 1.21f);  // a unit ray (10 %)
+    if (!valid) {
+      ++stats.rejected;
+      continue;
+    }
+    {
+      // Share of the valid events without a depth, smoothed over event time.
+      const double dt =
+          share_started_ ? 1e-6 * static_cast<double>(events[i].t_us - share_last_us_) : 0.0;
+      share_started_ = true;
+      share_last_us_ = events[i].t_us;
+      const double x = events[i].has_depth ? 0.0 : 1.0;
+      health_.depthless_share +=
+          (1.0 - std::exp(-dt / config_.rays.share_time_s)) * (x - health_.depthless_share);
+    }
+    if (!events[i].has_depth &&
+        (!config_.rays.enabled || health_.depthless_share < config_.rays.min_depthless_share)) {
+      ++stats.rays_unscored;
+      continue;
     }
     if (config_.max_event_rate > 0.0) {
       // The share for this window comes from the previous window's rate, so that the events
@@ -635,15 +663,20 @@ void EventSlam3d::runBatch(int b, ProcessStats& stats) {
   const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
   const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
   const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
+  if (config_.velocity_prediction > 0.0 && !lost && dt_s > 0.0) {
+    const Eigen::Vector3d w = config_.velocity_prediction * dt_s * angular_velocity_;
+    const double angle = w.norm();
+    const Eigen::Quaterniond dq(Eigen::AngleAxisd(
+        angle, angle > 0.0 ? Eigen::Vector3d(w / angle) : Eigen::Vector3d::UnitZ()));
+    particles_.predict(dq.cast<float>(),
+                       (config_.velocity_prediction * dt_s * linear_velocity_).cast<float>());
+  }
   particles_.step(batch_, batch_ray_, b, map_, static_cast<float>(std::sqrt(var_p)),
                   static_cast<float>(std::sqrt(var_r)), batch_decay_[b - 1],
                   static_cast<float>(config_.rays.weight));
   processed_ += static_cast<std::uint64_t>(b);
   since_resample_ += b;
   expected_ = particles_.weightedMean();
-  const double ray_share = static_cast<double>(rays) / b;
-  health_.depthless_share +=
-      (1.0 - std::exp(-dt_s / config_.health.slow_time_s)) * (ray_share - health_.depthless_share);
   updateHealth(b, dt_s);
   if (health_.state != TrackingState::kLost) updateMotion();
   // Mapping (eq. 8.9), only while tracking: a pose that does not fit would write a wrong map.
@@ -682,6 +715,8 @@ double EventSlam3d::diffusionScale(double speed, double reference) const {
 void EventSlam3d::restartMotion() {
   motion_window_open_ = false;
   motion_prev_set_ = false;
+  angular_velocity_.setZero();
+  linear_velocity_.setZero();
 }
 
 void EventSlam3d::updateMotion() {
@@ -727,6 +762,11 @@ void EventSlam3d::updateMotion() {
           1.0 - std::exp(-std::min(dt, 4.0 * config_.motion_window_s) / config_.motion_time_s);
       angular_speed_ += gain * (angle / used_s - angular_speed_);
       linear_speed_ += gain * (distance / used_s - linear_speed_);
+      Eigen::Quaterniond d = motion_prev_mean_.orientation.conjugate() * mean.orientation;
+      if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+      const Eigen::AngleAxisd rotation(d);
+      angular_velocity_ = rotation.angle() / used_s * rotation.axis();
+      linear_velocity_ = (mean.position - motion_prev_mean_.position) / used_s;
     }
   }
   motion_prev_mean_ = mean;

@@ -77,6 +77,11 @@ struct RayScoringConfig {
   /// A ray whose strongest map value (at p_*) is below this is not scored (nothing mapped there).
   double min_map_value = 0.5;
   double weight = 1.0;  ///< a scored ray's weight relative to a depth event's
+  /// Rays are scored only while the share of events without a depth (smoothed over
+  /// share_time_s of event time) is at least this: a fallback for when the depth camera sees
+  /// little, since with depth present rays cost accuracy (docs/results/ebslam3d.md). 0 = always.
+  double min_depthless_share = 0.5;
+  double share_time_s = 0.1;  ///< [s of event time]
 };
 
 /// The search when lost (docs/ebslam_core.md#eb-slam-3d-relocalisation): every interval_s of
@@ -121,7 +126,7 @@ struct TrackingHealth {
   /// Share of the depth events that fall near a mapped surface at p_* (smoothed over
   /// fast_time_s): low in unexplored space.
   double mapped_share = 1.0;
-  /// Share of the used events that had no depth (smoothed over slow_time_s).
+  /// Share of the valid events that had no depth (smoothed over RayScoringConfig::share_time_s).
   double depthless_share = 0.0;
 };
 
@@ -163,6 +168,11 @@ struct Ebslam3dConfig {
   /// them although it nets no motion. Why: docs/ebslam_core.md#eb-slam-3d-speed
   double motion_window_s = 0.05;  ///< [s of event time]
   double motion_time_s = 0.25;    ///< [s of event time] smoothing of the speeds
+  /// Constant-velocity prediction: before each batch every particle is moved by this share of
+  /// the estimate's velocity (from the same window means: rotation rate in the sensor frame,
+  /// linear velocity in the map frame) times the batch's time span; 0 = a pure random walk
+  /// (the thesis). Why: docs/ebslam_core.md#eb-slam-3d-speed
+  double velocity_prediction = 0.0;
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
   double voxel_size_m = 0.02;  ///< occurrence-map voxel edge [m] (thesis: 1 cm)
@@ -224,6 +234,8 @@ class ParticleSet3D {
   /// particles (0: as many as now). Returns false (and does nothing) when the total score is
   /// zero or not finite.
   bool resampleSystematic(int count = 0);
+  /// Moves every particle: q <- q dq (dq in the sensor frame), position += translation.
+  void predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation);
   /// Replaces every particle by `poses` (at least one), all with score 1 (alg. 9's start).
   void assign(const std::vector<Pose3>& poses);
   /// Indices of the `count` highest scores, best first.
@@ -335,6 +347,8 @@ class EventSlam3d {
   std::int64_t motion_window_start_us_ = 0;
   bool motion_window_open_ = false;
   Pose3 motion_prev_mean_;
+  Eigen::Vector3d angular_velocity_ = Eigen::Vector3d::Zero();  // sensor frame [rad/s]
+  Eigen::Vector3d linear_velocity_ = Eigen::Vector3d::Zero();   // map frame [m/s]
   double motion_prev_t_s_ = 0.0;
   bool motion_prev_set_ = false;
   double angular_speed_ = 0.0;
@@ -360,6 +374,8 @@ class EventSlam3d {
   std::int64_t next_reseed_us_ = 0;
   int search_round_ = 0;
   std::uint64_t reseed_rng_state_ = 0;
+  std::int64_t share_last_us_ = 0;  // time of the last event in depthless_share
+  bool share_started_ = false;
   std::uint64_t processed_ = 0;
   std::uint64_t rejected_ = 0;
   std::uint64_t rays_scored_ = 0;
