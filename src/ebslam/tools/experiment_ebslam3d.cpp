@@ -6,8 +6,9 @@
 //    (dedvs_scene.h) along the path, generates the eDVS events and the depth frames, and the
 //    D-eDVS depth fusion (dedvs_fusion.h) gives each event its 3D point, each event fused with
 //    the depth frame nearest in time; events without a depth go to the filter as viewing rays
-//    (scored along the ray; --no-ray-scoring drops them). The path is the depth camera's (TUM
-//    convention); the filter tracks the eDVS, scored against the eDVS's truth.
+//    (scored along the ray with --ray-scoring; --no-ray-scoring drops them before the filter). The
+//    path is the depth camera's (TUM convention); the filter tracks the eDVS, scored against the
+//    eDVS's truth.
 //  - synthetic: synthetic_depth_events.h (a textured box room, geometric event model).
 // The path is a TUM ground truth (--groundtruth) or a synthesised hand-held motion (--motion,
 // handheld_motions.h; floor_sweep runs in a room without the table, which would stand above it).
@@ -505,7 +506,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-map-mb", max_map_mb, "map memory bound [MiB] (0 = unbounded)");
   bool splat_all = false, no_rays = false, no_relocalisation = false;
   double cover_at_s = -1.0, cover_for_s = 2.0;
-  app.add_flag("--no-ray-scoring", no_rays, "drop events without a depth (as before ray scoring)");
+  bool rays = false;
+  app.add_flag("--no-ray-scoring", no_rays, "drop events without a depth before the filter");
+  app.add_flag("--ray-scoring", rays, "score events without a depth along their ray");
   app.add_flag("--no-relocalisation", no_relocalisation, "no search when lost (keeps mapping)");
   app.add_option("--cover-at", cover_at_s,
                  "forced loss: drop every event from this time on [s from the start]");
@@ -559,6 +562,7 @@ int main(int argc, char** argv) {
     if (reloc_n_opt->count()) config.relocalisation.particles = given.relocalisation.particles;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
+    if (rays) config.rays.enabled = true;
     if (no_rays) config.rays.enabled = false;
     if (no_relocalisation) config.relocalisation.enabled = false;
     if (cover_at_s >= 0.0 && !(cover_for_s > 0.0))

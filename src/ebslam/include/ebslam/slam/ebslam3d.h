@@ -72,7 +72,8 @@ struct TrackingHealthConfig {
 /// the strongest map value is taken as the event's depth, and every particle scores the best of
 /// three points one voxel apart around it along its own view of the ray. Rays are never mapped.
 struct RayScoringConfig {
-  bool enabled = true;
+  /// Off by default: on the tuning runs scoring rays cost accuracy (docs/results/ebslam3d.md).
+  bool enabled = false;
   double max_depth_m = 4.0;  ///< farthest depth searched along a ray [m]
   /// A ray whose strongest map value (at p_*) is below this is not scored (nothing mapped there).
   double min_map_value = 0.5;
