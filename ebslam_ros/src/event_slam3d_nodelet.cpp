@@ -392,12 +392,19 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
 
   bool diagnoseTracking(diagnostic_updater::DiagnosticStatusWrapper& status) const override {
     using diagnostic_msgs::DiagnosticStatus;
-    if (slam_->health().state == ebslam::TrackingState::kLost) {
-      status.summary(DiagnosticStatus::WARN, "lost: the events stopped fitting the map");
+    const ebslam::TrackingHealth& health = slam_->health();
+    if (health.state == ebslam::TrackingState::kLost) {
+      status.summary(DiagnosticStatus::WARN,
+                     "lost: the events stopped fitting the map; not mapping, searching");
       return true;
     }
-    if (slam_->health().state == ebslam::TrackingState::kRecovering) {
+    if (health.state == ebslam::TrackingState::kRecovering) {
       status.summary(DiagnosticStatus::WARN, "recovering: the events fit the map again");
+      return true;
+    }
+    if (health.relocalised) {
+      status.summaryf(DiagnosticStatus::OK, "relocalised after %.2f s lost; mapping again",
+                      health.last_relocalisation_s);
       return true;
     }
     return false;
@@ -423,6 +430,13 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     status.add("fit ratio (fast / slow)", health.fit_ratio);
     status.add("times lost", health.lost_count);
     status.add("time lost [s of event time]", health.time_lost_s);
+    status.add("relocalised", health.relocalised ? "true" : "false");
+    status.add("relocalisations", health.relocalisations);
+    status.add("last relocalisation [s of event time]", health.last_relocalisation_s);
+    status.add("share of events without depth", health.depthless_share);
+    status.add("events without depth scored along their ray", slam_->raysScored());
+    status.add("share of events in mapped space", health.mapped_share);
+    status.add("keyframes", slam_->keyframes().size());
     status.add("map chunks", slam_->map().chunkCount());
     status.add("map memory [MiB]", static_cast<double>(slam_->memoryBytes()) / (1024.0 * 1024.0));
     status.add("map chunks evicted", slam_->map().evictedChunks());

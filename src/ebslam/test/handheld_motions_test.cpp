@@ -61,6 +61,29 @@ TEST(HandheldMotions, ShakeIsFastAndSmall) {
   EXPECT_LT(max_offset, 0.5);
 }
 
+TEST(HandheldMotions, OrbitCirclesTheObjectAtCloseRange) {
+  const Trajectory path = makeHandheldMotion(HandheldMotion::kOrbit, 12.0, 2);
+  const Eigen::Vector3d target(0.0, 0.0, 0.85);
+  double min_d = 1e9, max_d = 0.0, turned = 0.0;
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const StampedPose& p = path[k];
+    const Eigen::Vector3d to_target = target - p.position;
+    min_d = std::min(min_d, to_target.norm());
+    max_d = std::max(max_d, to_target.norm());
+    const Eigen::Vector3d axis = p.orientation * Eigen::Vector3d::UnitZ();
+    EXPECT_GT(axis.dot(to_target.normalized()), 0.98);  // looks at the object (tremor aside)
+    if (k > 0) {
+      const Eigen::Vector3d a = path[k - 1].position - target, b = p.position - target;
+      turned += std::atan2(a.x() * b.y() - a.y() * b.x(), a.head<2>().dot(b.head<2>()));
+    }
+  }
+  EXPECT_GT(min_d, 0.38);
+  EXPECT_LT(min_d, 0.5);
+  EXPECT_GT(max_d, 0.7);
+  EXPECT_LT(max_d, 0.82);
+  EXPECT_NEAR(turned, 2.0 * M_PI, 0.1);  // one revolution in 12 s
+}
+
 TEST(HandheldMotions, SeededAndValidated) {
   const Trajectory a = makeHandheldMotion(HandheldMotion::kShake, 2.0, 5);
   const Trajectory b = makeHandheldMotion(HandheldMotion::kShake, 2.0, 5);
@@ -70,7 +93,7 @@ TEST(HandheldMotions, SeededAndValidated) {
   EXPECT_NE(a[100].position, c[100].position);
   EXPECT_THROW(makeHandheldMotion(HandheldMotion::kShake, 0.0, 1), std::invalid_argument);
   EXPECT_THROW(handheldMotionFromString("spin"), std::invalid_argument);
-  for (const char* name : {"yaw_turn", "floor_sweep", "shake"}) {
+  for (const char* name : {"yaw_turn", "floor_sweep", "shake", "orbit"}) {
     EXPECT_STREQ(toString(handheldMotionFromString(name)), name);
   }
 }

@@ -5,8 +5,10 @@
 //  - dedvs (default): the D-eDVS simulator (dedvs_simulator.h) renders a furnished room
 //    (dedvs_scene.h) along the path, generates the eDVS events and the depth frames, and the
 //    D-eDVS depth fusion (dedvs_fusion.h) gives each event its 3D point, each event fused with
-//    the depth frame nearest in time; events without a depth are dropped. The path is the depth
-//    camera's (TUM convention); the filter tracks the eDVS, scored against the eDVS's truth.
+//    the depth frame nearest in time; events without a depth go to the filter as viewing rays
+//    (scored along the ray with --ray-scoring; --no-ray-scoring drops them before the filter). The
+//    path is the depth camera's (TUM convention); the filter tracks the eDVS, scored against the
+//    eDVS's truth.
 //  - synthetic: synthetic_depth_events.h (a textured box room, geometric event model).
 // The path is a TUM ground truth (--groundtruth) or a synthesised hand-held motion (--motion,
 // handheld_motions.h; floor_sweep runs in a room without the table, which would stand above it).
@@ -16,6 +18,11 @@
 // --events-cache keeps the fused D-eDVS events of a (path, duration, scene seed) in a file, so
 // that runs differing only in the filter skip the simulation. --diagnostics writes one CSV row per
 // recorded estimate: tracking state, ESS, the fit, events used, the pose error before alignment.
+// --cover-at T --cover-for D drops every event in [T, T + D) s (the sensor covered: a forced
+// loss) and reports how long after T + D the tracking state was back to tracking on a right pose.
+// The JSON reports the tracking state's false alarms (lost while the error after alignment is
+// below 3 cm) and misses (tracking while it is above 5 cm) as shares of the run time, the
+// relocalisations (LOST -> RELOCALISED and their durations) and the filter's memory over time.
 // e.g. ebslam_experiment_ebslam3d --groundtruth rgbd_dataset_freiburg1_xyz-groundtruth.txt --seed 2
 // Prints one JSON object (stdout). Exit status: 0 success, 1 usage / input error.
 
@@ -84,6 +91,7 @@ ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_
       pending.pop_front();
       if (!std::isfinite(f.depth_m)) {
         ++*without_depth;
+        if (f.ray.allFinite()) sink(rayEvent(f.event.t_us, f.ray));
         continue;
       }
       PointEvent p;
@@ -108,7 +116,8 @@ ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_
 
 // Events cache: a header (magic, counts), the eDVS truth, the fused events; native byte order
 // (a cache is local to a machine).
-constexpr std::uint64_t kCacheMagic = 0x33444d414c534245ULL;  // "EBSLAM3D" + version 1
+// Version 2: events without a depth are stored as rays (PointEvent::has_depth).
+constexpr std::uint64_t kCacheMagic = 0x33444d414c534246ULL;  // "EBSLAM3D" + version 2
 
 bool readCache(const std::string& path, ebslam::PointEventVector& events, ebslam::Trajectory& truth,
                std::size_t& simulated, std::size_t& without_depth) {
@@ -116,7 +125,9 @@ bool readCache(const std::string& path, ebslam::PointEventVector& events, ebslam
   if (!in) return false;
   std::uint64_t header[5] = {};
   in.read(reinterpret_cast<char*>(header), sizeof(header));
-  if (!in || header[0] != kCacheMagic) throw std::runtime_error("not an events cache: " + path);
+  if (!in || header[0] != kCacheMagic) {
+    throw std::runtime_error("not an events cache of this version: " + path);
+  }
   simulated = header[1];
   without_depth = header[2];
   truth.resize(header[3]);
@@ -167,6 +178,8 @@ struct DiagnosticRow {
   double t_s;
   ebslam::TrackingHealth health;
   std::size_t chunk_events, used_total;
+  double angular_speed, linear_speed;  // [rad/s], [m/s]
+  std::size_t memory_bytes;            // map, particles and keyframes
 };
 
 // Feeds the events to the filter in chunks of record_step_us of event time and records one
@@ -210,7 +223,8 @@ class ChunkedRun {
     if (estimate_.empty() || p.t_s > estimate_.back().t_s) {
       estimate_.push_back(p);
       rows_.push_back({p.t_s, slam_.health(), chunk_.size(),
-                       static_cast<std::size_t>(slam_.processedEvents())});
+                       static_cast<std::size_t>(slam_.processedEvents()), slam_.angularSpeed(),
+                       slam_.linearSpeed(), slam_.memoryBytes()});
     }
     chunk_.clear();
   }
@@ -252,8 +266,9 @@ void writeMapXyz(const std::string& path, const ebslam::EventSlam3d& slam) {
 void writeDiagnostics(const std::string& path, const ChunkedRun& run,
                       const ebslam::Trajectory& truth) {
   std::ofstream out(path);
-  out << "t_s,state,ess_share,fit_fast,fit_slow,fit_ratio,chunk_events,used_events,"
-         "position_error_m,rotation_error_deg\n";
+  out << "t_s,state,ess_share,fit_fast,fit_slow,fit_ratio,mapped_share,depthless_share,"
+         "angular_speed,linear_speed,memory_bytes,chunk_events,used_events,position_error_m,"
+         "rotation_error_deg\n";
   const ebslam::StampedPose start = ebslam::interpolatePose(truth, truth.front().t_s);
   const Eigen::Quaterniond inv_start = start.orientation.conjugate();
   const ebslam::Trajectory& estimate = run.estimate();
@@ -267,8 +282,9 @@ void writeDiagnostics(const std::string& path, const ChunkedRun& run,
         estimate[i].orientation.angularDistance(rel_orientation) * 180.0 / M_PI;
     out << r.t_s << ',' << ebslam::toString(r.health.state) << ',' << r.health.ess_share << ','
         << r.health.fit_fast << ',' << r.health.fit_slow << ',' << r.health.fit_ratio << ','
-        << r.chunk_events << ',' << r.used_total << ',' << position_error << ',' << rotation_error
-        << '\n';
+        << r.health.mapped_share << ',' << r.health.depthless_share << ',' << r.angular_speed << ','
+        << r.linear_speed << ',' << r.memory_bytes << ',' << r.chunk_events << ',' << r.used_total
+        << ',' << position_error << ',' << rotation_error << '\n';
   }
   if (!out) throw std::runtime_error("cannot write " + path);
 }
@@ -278,12 +294,112 @@ struct RunSummary {
   std::string groundtruth, source, preset;
   std::uint64_t scene_seed = 0;
   std::size_t simulated = 0, without_depth = 0;
+  double cover_at_s = -1.0, cover_for_s = 0.0;  // forced loss (cover_at_s < 0: none)
+  double cover_origin_s = 0.0;                  // event time of the path's start [s]
+  std::size_t covered = 0;                      // events dropped by the cover
   ebslam::ImuSimulatorConfig imu;
 };
+
+// The tracking state against the error after alignment, over the run's time (each recorded
+// estimate stands for the time to the next one), the relocalisations, the forced loss and the
+// memory's growth.
+struct StateSummary {
+  double run_s = 0.0;
+  double false_alarm_share = 0.0;  // lost while the error is below 3 cm
+  double miss_share = 0.0;         // tracking while the error is above 5 cm
+  double lost_share = 0.0;
+  std::vector<double> relocalisation_s;  // LOST -> TRACKING durations [s]
+  double cover_recovery_s = -1.0;  // tracking on a right pose again after the cover (-1: never)
+  bool cover_noticed = false;      // the state left tracking after the cover
+  double memory_first_minute_mib = 0.0, memory_end_mib = 0.0, memory_growth_mib_per_min = 0.0;
+};
+
+StateSummary summariseStates(const std::vector<DiagnosticRow>& rows,
+                             const ebslam::TrajectoryEvaluation& eval, const RunSummary& summary) {
+  using ebslam::TrackingState;
+  StateSummary out;
+  if (rows.size() < 2) return out;
+  // Error per row (rows and estimates are 1:1; the evaluation lists the associated ones).
+  std::vector<double> error(rows.size(), std::numeric_limits<double>::quiet_NaN());
+  std::size_t e = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    while (e < eval.errors.size() && eval.errors[e].t_s < rows[i].t_s - 1e-9) ++e;
+    if (e < eval.errors.size() && std::abs(eval.errors[e].t_s - rows[i].t_s) < 1e-9) {
+      error[i] = eval.errors[e].position_error_m;
+    }
+  }
+  double total = 0.0, false_alarm = 0.0, miss = 0.0, lost = 0.0;
+  double lost_start = -1.0;
+  const double cover_end = summary.cover_at_s >= 0.0
+                               ? summary.cover_origin_s + summary.cover_at_s + summary.cover_for_s
+                               : std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < rows.size(); ++i) {
+    const double dt = std::min(rows[i + 1].t_s - rows[i].t_s, 0.1);  // gaps (a cover) not counted
+    const TrackingState state = rows[i].health.state;
+    if (std::isfinite(error[i])) {
+      total += dt;
+      if (state == TrackingState::kLost) {
+        lost += dt;
+        if (error[i] < 0.03) false_alarm += dt;
+      }
+      if (state == TrackingState::kTracking && error[i] > 0.05) miss += dt;
+    }
+    if (state == TrackingState::kLost && lost_start < 0.0) lost_start = rows[i].t_s;
+    if (state == TrackingState::kTracking && lost_start >= 0.0) {
+      out.relocalisation_s.push_back(rows[i].t_s - lost_start);
+      lost_start = -1.0;
+    }
+    if (rows[i].t_s >= cover_end && state != TrackingState::kTracking) out.cover_noticed = true;
+  }
+  out.run_s = total;
+  if (total > 0.0) {
+    out.false_alarm_share = false_alarm / total;
+    out.miss_share = miss / total;
+    out.lost_share = lost / total;
+  }
+  // Recovered: from the first row after the cover on which the state is tracking and stays so
+  // for 1 s with every error below 5 cm.
+  for (std::size_t i = 0; i < rows.size() && std::isfinite(cover_end); ++i) {
+    if (rows[i].t_s < cover_end) continue;
+    bool good = true;
+    std::size_t j = i;
+    for (; j < rows.size() && rows[j].t_s < rows[i].t_s + 1.0 && good; ++j) {
+      good = rows[j].health.state == TrackingState::kTracking && std::isfinite(error[j]) &&
+             error[j] < 0.05;
+    }
+    if (good && j < rows.size()) {
+      out.cover_recovery_s = rows[i].t_s - cover_end;
+      break;
+    }
+  }
+  // Memory: at the end of the first minute (or of the first half of a shorter run), at the end,
+  // and its growth over the second half of the run.
+  const double t0 = rows.front().t_s, t1 = rows.back().t_s;
+  const double first = std::min(t0 + 60.0, 0.5 * (t0 + t1)), half = 0.5 * (t0 + t1);
+  double m_first = 0.0, m_half = 0.0;
+  for (const DiagnosticRow& r : rows) {
+    if (r.t_s <= first) m_first = static_cast<double>(r.memory_bytes);
+    if (r.t_s <= half) m_half = static_cast<double>(r.memory_bytes);
+  }
+  const double mib = 1.0 / 1048576.0;
+  out.memory_first_minute_mib = m_first * mib;
+  out.memory_end_mib = static_cast<double>(rows.back().memory_bytes) * mib;
+  if (t1 > half) {
+    out.memory_growth_mib_per_min =
+        (static_cast<double>(rows.back().memory_bytes) - m_half) * mib / ((t1 - half) / 60.0);
+  }
+  return out;
+}
 
 void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const ChunkedRun& run,
                const ebslam::TrajectoryEvaluation& eval) {
   const ebslam::EventSlam3d& slam = run.slam();
+  const StateSummary states = summariseStates(run.rows(), eval, r);
+  std::string relocalisations = "[";
+  for (std::size_t i = 0; i < states.relocalisation_s.size(); ++i) {
+    relocalisations += (i ? ", " : "") + std::to_string(states.relocalisation_s[i]);
+  }
+  relocalisations += "]";
   const double span = run.spanSeconds(), cpu = run.cpuSeconds();
   const std::size_t streamed = run.streamed();
   std::printf(
@@ -301,7 +417,14 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"evicted_chunks\": %llu, \"max_event_rate\": %g, \"sigma_position_per_sqrt_s\": %g, "
       "\"sigma_rotation_per_sqrt_s\": %g, \"lost_count\": %llu, \"time_lost_s\": %.3f, "
       "\"final_state\": \"%s\", \"diffusion_min_scale\": %g, \"diffusion_max_scale\": %g, "
-      "\"reference_angular_speed\": %g, \"reference_linear_speed\": %g, ",
+      "\"reference_angular_speed\": %g, \"reference_linear_speed\": %g, "
+      "\"ray_scoring\": %s, \"rays_scored\": %llu, \"rays_unscored\": %llu, "
+      "\"relocalisation\": %s, \"relocalisations\": %llu, \"relocalisation_s\": %s, "
+      "\"last_relocalisation_s\": %.3f, \"false_alarm_share\": %.4f, \"miss_share\": %.4f, "
+      "\"lost_share\": %.4f, \"cover_at_s\": %g, \"cover_for_s\": %g, \"covered_events\": %zu, "
+      "\"cover_noticed\": %s, \"cover_recovery_s\": %.3f, \"memory_first_minute_mib\": %.3f, "
+      "\"memory_end_mib\": %.3f, \"memory_growth_mib_per_min\": %.4f, \"keyframes\": %zu, "
+      "\"motion_window_s\": %g, \"velocity_prediction\": %g, \"ray_min_depthless_share\": %g, ",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -314,7 +437,17 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       config.max_event_rate, config.sigma_position_per_sqrt_s, config.sigma_rotation_per_sqrt_s,
       static_cast<unsigned long long>(slam.health().lost_count), slam.health().time_lost_s,
       ebslam::toString(slam.health().state), config.diffusion_min_scale, config.diffusion_max_scale,
-      config.reference_angular_speed, config.reference_linear_speed);
+      config.reference_angular_speed, config.reference_linear_speed,
+      config.rays.enabled ? "true" : "false", static_cast<unsigned long long>(slam.raysScored()),
+      static_cast<unsigned long long>(slam.raysUnscored()),
+      config.relocalisation.enabled ? "true" : "false",
+      static_cast<unsigned long long>(slam.health().relocalisations), relocalisations.c_str(),
+      slam.health().last_relocalisation_s, states.false_alarm_share, states.miss_share,
+      states.lost_share, r.cover_at_s, r.cover_for_s, r.covered,
+      states.cover_noticed ? "true" : "false", states.cover_recovery_s,
+      states.memory_first_minute_mib, states.memory_end_mib, states.memory_growth_mib_per_min,
+      slam.keyframes().size(), config.motion_window_s, config.velocity_prediction,
+      config.rays.min_depthless_share);
   const ebslam::GyroPrior& gyro = slam.gyro();
   std::printf(
       "\"imu\": %s, \"imu_rate_hz\": %g, \"gyro_noise_density\": %g, "
@@ -347,9 +480,9 @@ int main(int argc, char** argv) {
                      ->check(CLI::ExistingFile);
   auto* motion_opt =
       app.add_option("--motion", motion,
-                     "synthesised hand-held path instead: yaw_turn, floor_sweep, shake "
+                     "synthesised hand-held path instead: yaw_turn, floor_sweep, shake, orbit "
                      "(handheld_motions.h; 15 s unless --motion-duration)")
-          ->check(CLI::IsMember({"yaw_turn", "floor_sweep", "shake"}))
+          ->check(CLI::IsMember({"yaw_turn", "floor_sweep", "shake", "orbit"}))
           ->excludes(gt_opt);
   double motion_duration_s = 15.0;
   app.add_option("--motion-duration", motion_duration_s, "length of the --motion path [s]")
@@ -388,13 +521,37 @@ int main(int argc, char** argv) {
                                   "angular speed of diffusion scale 1 [rad/s]");
   auto* vref_opt = app.add_option("--reference-linear-speed", config.reference_linear_speed,
                                   "linear speed of diffusion scale 1 [m/s]");
+  auto* window_opt = app.add_option("--motion-window", config.motion_window_s,
+                                    "window of the speed measure [s of event time]");
+  auto* velocity_opt = app.add_option("--velocity-prediction", config.velocity_prediction,
+                                      "share of the estimate's velocity predicted per batch");
+  auto* ray_share_opt =
+      app.add_option("--ray-min-depthless-share", config.rays.min_depthless_share,
+                     "score rays only while this share of the events has no depth (0 = always)");
+  auto* lost_fit_opt =
+      app.add_option("--lost-fit", config.health.lost_fit, "tracking state: lost below this fit");
+  auto* recover_fit_opt = app.add_option("--recover-fit", config.health.recover_fit,
+                                         "tracking state: recovering at or above this fit");
+  auto* fit_time_opt = app.add_option("--fit-time", config.health.fast_time_s,
+                                      "tracking state: smoothing of the fit [s of event time]");
+  auto* reloc_n_opt = app.add_option("--relocalisation-particles", config.relocalisation.particles,
+                                     "particles while searching when lost");
   app.add_option("--diagnostics", diagnostics_out,
                  "CSV per recorded estimate: tracking state, ESS, fit, error before alignment");
   app.add_option("--events-cache", events_cache,
                  "file of the fused D-eDVS events: read if it exists, else written");
   double max_map_mb = -1.0;
   app.add_option("--max-map-mb", max_map_mb, "map memory bound [MiB] (0 = unbounded)");
-  bool splat_all = false;
+  bool splat_all = false, no_rays = false, no_relocalisation = false;
+  double cover_at_s = -1.0, cover_for_s = 2.0;
+  bool rays = false;
+  app.add_flag("--no-ray-scoring", no_rays, "drop events without a depth before the filter");
+  app.add_flag("--ray-scoring", rays, "score events without a depth along their ray");
+  app.add_flag("--no-relocalisation", no_relocalisation, "no search when lost (keeps mapping)");
+  app.add_option("--cover-at", cover_at_s,
+                 "forced loss: drop every event from this time on [s from the start]");
+  app.add_option("--cover-for", cover_for_s, "length of the forced loss [s]")
+      ->capture_default_str();
   app.add_flag("--splat-all-particles", splat_all, "eq. 8.9 with every particle");
   app.add_option("--edges-per-m2", room.edges_per_square_m, "synthetic room texture density")
       ->capture_default_str();
@@ -456,8 +613,22 @@ int main(int argc, char** argv) {
     if (dmax_opt->count()) config.diffusion_max_scale = given.diffusion_max_scale;
     if (wref_opt->count()) config.reference_angular_speed = given.reference_angular_speed;
     if (vref_opt->count()) config.reference_linear_speed = given.reference_linear_speed;
+    if (window_opt->count()) config.motion_window_s = given.motion_window_s;
+    if (velocity_opt->count()) config.velocity_prediction = given.velocity_prediction;
+    if (ray_share_opt->count()) {
+      config.rays.min_depthless_share = given.rays.min_depthless_share;
+    }
+    if (lost_fit_opt->count()) config.health.lost_fit = given.health.lost_fit;
+    if (recover_fit_opt->count()) config.health.recover_fit = given.health.recover_fit;
+    if (fit_time_opt->count()) config.health.fast_time_s = given.health.fast_time_s;
+    if (reloc_n_opt->count()) config.relocalisation.particles = given.relocalisation.particles;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
+    if (rays) config.rays.enabled = true;
+    if (no_rays) config.rays.enabled = false;
+    if (no_relocalisation) config.relocalisation.enabled = false;
+    if (cover_at_s >= 0.0 && !(cover_for_s > 0.0))
+      throw std::runtime_error("--cover-for must be > 0");
     Trajectory truth;
     if (!motion.empty()) {
       // The path's shape is fixed (seed 1); --scene-seed varies the room, events and noise.
@@ -469,11 +640,26 @@ int main(int argc, char** argv) {
     if (truth.size() < 2) throw std::runtime_error("ground truth has fewer than two poses");
     const bool with_table = motion != "floor_sweep";
 
-    RunSummary summary{groundtruth, source, preset, scene_seed, 0, 0, {}};
+    RunSummary summary;
+    summary.groundtruth = groundtruth;
+    summary.source = source;
+    summary.preset = preset;
+    summary.scene_seed = scene_seed;
+    summary.cover_at_s = cover_at_s;
+    summary.cover_for_s = cover_for_s;
     const auto record_step_us = static_cast<std::int64_t>(record_every_s * 1e6);
     std::unique_ptr<ChunkedRun> run;
     PointEventVector held;  // with --imu: the events, for the two runs
+    // The cover is timed from the path's start (event times are the path's, shifted to 0 for
+    // the D-eDVS source).
+    double cover_origin_s = 0.0;
     const PointSink sink = [&](const PointEvent& e) {
+      const double t = 1e-6 * static_cast<double>(e.t_us) - cover_origin_s;
+      if (cover_at_s >= 0.0 && t >= cover_at_s && t < cover_at_s + cover_for_s) {
+        ++summary.covered;
+        return;
+      }
+      if (no_rays && !e.has_depth) return;
       if (use_imu) {
         held.push_back(e);
       } else {
@@ -514,6 +700,8 @@ int main(int argc, char** argv) {
     } else {
       config.focal_px = sensor.focal_px;
       const double t0 = truth.front().t_s;
+      cover_origin_s = t0;
+      summary.cover_origin_s = t0;
       const double t1 =
           duration_s > 0.0 ? std::min(truth.back().t_s, t0 + duration_s) : truth.back().t_s;
       room.seed = scene_seed;

@@ -66,17 +66,19 @@ const char* toString(HandheldMotion motion) {
       return "floor_sweep";
     case HandheldMotion::kShake:
       return "shake";
+    case HandheldMotion::kOrbit:
+      return "orbit";
   }
   return "unknown";
 }
 
 HandheldMotion handheldMotionFromString(const std::string& name) {
-  for (HandheldMotion m :
-       {HandheldMotion::kYawTurn, HandheldMotion::kFloorSweep, HandheldMotion::kShake}) {
+  for (HandheldMotion m : {HandheldMotion::kYawTurn, HandheldMotion::kFloorSweep,
+                           HandheldMotion::kShake, HandheldMotion::kOrbit}) {
     if (name == toString(m)) return m;
   }
   throw std::invalid_argument("unknown hand-held motion '" + name +
-                              "' (yaw_turn, floor_sweep, shake)");
+                              "' (yaw_turn, floor_sweep, shake, orbit)");
 }
 
 Trajectory makeHandheldMotion(HandheldMotion motion, double duration_s, std::uint64_t seed,
@@ -118,6 +120,17 @@ Trajectory makeHandheldMotion(HandheldMotion motion, double duration_s, std::uin
         yaw = 0.2 * std::sin(0.25 * t);
         pitch = 35.0 * M_PI / 180.0;
         extra_angle = shake_angle.at(t);
+        break;
+      }
+      case HandheldMotion::kOrbit: {
+        const Eigen::Vector3d target(0.0, 0.0, 0.85);
+        const double azimuth = M_PI + 2.0 * M_PI * t / 12.0;
+        const double radius = 0.45 + 0.2 * std::sin(2.0 * M_PI * t / 7.0);
+        position =
+            target + Eigen::Vector3d(radius * std::cos(azimuth), radius * std::sin(azimuth), 0.35);
+        const Eigen::Vector3d view = target - position;
+        yaw = std::atan2(view.y(), view.x());
+        pitch = std::atan2(-view.z(), view.head<2>().norm());
         break;
       }
     }

@@ -73,6 +73,7 @@ DepthEventFusion::DepthEventFusion(const DedvsSensors& sensors, const DepthFusio
       const std::optional<Eigen::Vector3d> direction = edvs.backprojectRay(Eigen::Vector2d(x, y));
       if (!direction) continue;
       ray.direction = direction->cast<float>();
+      ray.unit = direction->normalized().cast<float>();
       const Eigen::Vector3d rotated = r * *direction;
       if (!(rotated.z() > 1e-6)) continue;
       ray.edvs_z_per_depth_z = static_cast<float>(1.0 / rotated.z());
@@ -187,6 +188,7 @@ FusedEvent DepthEventFusion::fuse(const Event& event) const {
     fused.status = FusionStatus::kOutsideSensor;
     return fused;
   }
+  fused.ray = rays_[static_cast<std::size_t>(event.y) * sensors_.edvs.width + event.x].unit;
   if (frames_.empty()) {
     fused.status = FusionStatus::kNoDepthFrame;
     return fused;

@@ -3,12 +3,23 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 namespace ebslam {
+
+PointEvent rayEvent(std::int64_t t_us, const Eigen::Vector3f& ray) {
+  PointEvent e;
+  e.t_us = t_us;
+  const float norm = ray.norm();
+  e.point = norm > 0.0f && std::isfinite(norm) ? Eigen::Vector3f(ray / norm) : ray;
+  e.has_depth = false;
+  return e;
+}
 
 Ebslam3dConfig Ebslam3dConfig::fast() {
   Ebslam3dConfig c;
@@ -71,14 +82,49 @@ void Ebslam3dConfig::validate() const {
   if (!positive(motion_window_s) || !positive(motion_time_s)) {
     fail("motion_window_s and motion_time_s must be positive");
   }
+  if (!(velocity_prediction >= 0.0 && velocity_prediction <= 1.0)) {
+    fail("velocity_prediction must be in [0, 1]");
+  }
   if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
       !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
       !std::isfinite(health.warmup_s)) {
     fail("health: the times must be positive (warmup_s >= 0) and finite");
   }
-  if (!(health.lost_ratio > 0.0 && health.lost_ratio <= health.recover_ratio &&
-        std::isfinite(health.recover_ratio))) {
-    fail("health: need 0 < lost_ratio <= recover_ratio (finite)");
+  if (!(health.lost_fit > 0.0 && health.lost_fit <= health.recover_fit &&
+        health.recover_fit <= 1.0)) {
+    fail("health: need 0 < lost_fit <= recover_fit <= 1");
+  }
+  if (!(health.min_surface_value > 0.0) || !std::isfinite(health.min_surface_value) ||
+      !(health.sample_interval_s >= 0.0) || !std::isfinite(health.sample_interval_s)) {
+    fail("health: need a positive min_surface_value and a finite sample_interval_s >= 0");
+  }
+  if (!(rays.min_depthless_share >= 0.0 && rays.min_depthless_share <= 1.0) ||
+      !positive(rays.share_time_s)) {
+    fail("rays: need min_depthless_share in [0, 1] and a positive share_time_s");
+  }
+  if (!positive(rays.max_depth_m) || !(rays.min_map_value >= 0.0) ||
+      !std::isfinite(rays.min_map_value) || !(rays.weight >= 0.0) || !std::isfinite(rays.weight)) {
+    fail("rays: max_depth_m must be positive, min_map_value and weight finite and >= 0");
+  }
+  const RelocalisationConfig& r = relocalisation;
+  if (r.particles < 1 || r.particles > 100000)
+    fail("relocalisation.particles must be in [1, 100000]");
+  if (!positive(r.interval_s) || !positive(r.sigma_position_m) || !positive(r.sigma_rotation_rad) ||
+      !(r.growth >= 1.0) || !std::isfinite(r.growth) ||
+      !(r.max_sigma_position_m >= r.sigma_position_m) || !std::isfinite(r.max_sigma_position_m) ||
+      !(r.max_sigma_rotation_rad >= r.sigma_rotation_rad) || !(r.max_sigma_rotation_rad <= 3.2)) {
+    fail(
+        "relocalisation: need positive interval and sigmas, growth >= 1, max sigmas >= the "
+        "initial ones (rotation at most 3.2 rad)");
+  }
+  if (!(r.elite_share >= 0.0 && r.elite_share < 1.0)) {
+    fail("relocalisation.elite_share must be in [0, 1)");
+  }
+  if (r.candidate_keyframes < 0 || r.max_keyframes < 2 || !positive(r.keyframe_distance_m) ||
+      !positive(r.keyframe_angle_rad)) {
+    fail(
+        "relocalisation: need candidate_keyframes >= 0, max_keyframes >= 2 and positive keyframe "
+        "spacings");
   }
   if (!(score_alpha > 0.0 && score_alpha <= 1.0)) fail("score_alpha must be in (0, 1]");
   if (!positive(voxel_size_m)) fail("voxel_size_m must be positive");
@@ -122,8 +168,57 @@ void ParticleSet3D::reset(int n, const Pose3& start, std::uint64_t seed) {
   qz_.assign(count, static_cast<float>(q.z()));
   scores_.assign(count, 1.0);  // alg. 9: s_i = 1
   rng_ = FastNormalGenerator(seed);
-  scratch_.resize(count * 20);  // see step()
+  scratch_.resize(count * 22);  // see step()
   scratch_w_.resize(count);
+}
+
+void ParticleSet3D::assign(const std::vector<Pose3>& poses) {
+  if (poses.empty()) throw std::invalid_argument("ParticleSet3D::assign: no poses");
+  const std::size_t count = poses.size();
+  std::vector<float>* arrays[] = {&x_, &y_, &z_, &qw_, &qx_, &qy_, &qz_};
+  for (std::vector<float>* a : arrays) a->resize(count);
+  Eigen::Quaterniond first = poses.front().orientation.normalized();
+  for (std::size_t i = 0; i < count; ++i) {
+    Eigen::Quaterniond q = poses[i].orientation.normalized();
+    if (q.coeffs().dot(first.coeffs()) < 0.0) q.coeffs() = -q.coeffs();  // one hemisphere
+    x_[i] = static_cast<float>(poses[i].position.x());
+    y_[i] = static_cast<float>(poses[i].position.y());
+    z_[i] = static_cast<float>(poses[i].position.z());
+    qw_[i] = static_cast<float>(q.w());
+    qx_[i] = static_cast<float>(q.x());
+    qy_[i] = static_cast<float>(q.y());
+    qz_[i] = static_cast<float>(q.z());
+  }
+  scores_.assign(count, 1.0);
+  scratch_.resize(count * 22);
+  scratch_w_.resize(count);
+}
+
+void ParticleSet3D::predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation) {
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const Eigen::Quaternionf q =
+        (Eigen::Quaternionf(qw_[i], qx_[i], qy_[i], qz_[i]) * dq).normalized();
+    qw_[i] = q.w();
+    qx_[i] = q.x();
+    qy_[i] = q.y();
+    qz_[i] = q.z();
+    x_[i] += translation.x();
+    y_[i] += translation.y();
+    z_[i] += translation.z();
+  }
+}
+
+std::vector<int> ParticleSet3D::best(int count) const {
+  const std::vector<double>& w = scores_.stored();
+  std::vector<int> order(w.size());
+  std::iota(order.begin(), order.end(), 0);
+  const auto k = static_cast<std::size_t>(std::max(0, std::min(count, size())));
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
+                    [&](int a, int b) {
+                      return w[static_cast<std::size_t>(a)] > w[static_cast<std::size_t>(b)];
+                    });
+  order.resize(k);
+  return order;
 }
 
 Pose3 ParticleSet3D::particle(int i) const {
@@ -198,11 +293,12 @@ double ParticleSet3D::essShare() const {
   return total * total / squares / static_cast<double>(w.size());
 }
 
-float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
-                          float sigma_position, float sigma_rotation, const BatchDecay& decay) {
+float ParticleSet3D::step(const Eigen::Vector3f* points, const std::uint8_t* is_ray, int batch,
+                          const ChunkedVoxelMap& map, float sigma_position, float sigma_rotation,
+                          const BatchDecay& decay, float ray_weight) {
   const std::size_t n = x_.size();
   // Scratch, structure of arrays of n floats each: 7 normals, 9 rotation entries, 3 voxel
-  // coordinates (as int32), the score sums.
+  // coordinates (as int32), the score sums, a ray's sample values and its best.
   float* g[7];
   for (int k = 0; k < 7; ++k) g[k] = scratch_.data() + k * n;
   float* rot[9];
@@ -211,6 +307,8 @@ float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const Chunke
   std::int32_t* iy = ix + n;
   std::int32_t* iz = iy + n;
   float* sums = scratch_.data() + 19 * n;
+  float* ray_values = scratch_.data() + 20 * n;
+  float* ray_best = scratch_.data() + 21 * n;
   for (std::size_t i = 0; i < n; ++i) {
     float v[8];
     rng_.normals4(v);
@@ -263,9 +361,8 @@ float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const Chunke
   std::fill(sums, sums + n, 0.0f);
   const float inv_voxel = static_cast<float>(1.0 / map.voxelSize());
   constexpr float kLimit = static_cast<float>(ChunkedVoxelMap::kMaxVoxelCoordinate);
-  for (int j = 0; j < batch; ++j) {
-    const float ex = points[j].x() * inv_voxel, ey = points[j].y() * inv_voxel,
-                ez = points[j].z() * inv_voxel;
+  // Adds the map values of every particle's view of point e (in voxel units) to `out`.
+  const auto accumulate = [&](float ex, float ey, float ez, float* out) {
     float max_abs = 0.0f;
 #pragma omp simd reduction(max : max_abs)
     for (std::size_t i = 0; i < n; ++i) {
@@ -286,8 +383,28 @@ float ParticleSet3D::step(const Eigen::Vector3f* points, int batch, const Chunke
       iz[i] = tz - (static_cast<float>(tz) > fz ? 1 : 0);
     }
     if (max_abs < kLimit) {
-      map.accumulateVoxels(ix, iy, iz, static_cast<int>(n), sums);
+      map.accumulateVoxels(ix, iy, iz, static_cast<int>(n), out);
     }  // else: a particle far outside the map's range; its view of this event scores nothing
+  };
+  for (int j = 0; j < batch; ++j) {
+    const float ex = points[j].x() * inv_voxel, ey = points[j].y() * inv_voxel,
+                ez = points[j].z() * inv_voxel;
+    if (is_ray == nullptr || is_ray[j] == 0) {
+      accumulate(ex, ey, ez, sums);
+      continue;
+    }
+    // A ray at its predicted depth: the best of three points one voxel apart along it, so that a
+    // particle is not judged by the depth predicted from p_*.
+    const float depth = std::sqrt(ex * ex + ey * ey + ez * ez);  // [voxels]
+    if (!(depth > 1.0f)) continue;
+    std::fill(ray_best, ray_best + n, 0.0f);
+    for (int k = -1; k <= 1; ++k) {
+      const float f = (depth + static_cast<float>(k)) / depth;
+      std::fill(ray_values, ray_values + n, 0.0f);
+      accumulate(f * ex, f * ey, f * ez, ray_values);
+      for (std::size_t i = 0; i < n; ++i) ray_best[i] = std::max(ray_best[i], ray_values[i]);
+    }
+    for (std::size_t i = 0; i < n; ++i) sums[i] += ray_weight * ray_best[i];
   }
   const double factor = scores_.beginUpdate(decay);
   std::vector<double>& stored = scores_.stored();
@@ -310,9 +427,10 @@ void ParticleSet3D::rotateBody(const Eigen::Quaternionf& delta) {
   }
 }
 
-bool ParticleSet3D::resampleSystematic() {
+bool ParticleSet3D::resampleSystematic(int count) {
   std::vector<double>& w = scores_.stored();
   const std::size_t n = w.size();
+  const std::size_t m = count > 0 ? static_cast<std::size_t>(count) : n;
   double total = 0.0;
   for (double s : w) total += s;
   if (!(total > 0.0) || !std::isfinite(total)) return false;
@@ -320,18 +438,25 @@ bool ParticleSet3D::resampleSystematic() {
   std::vector<float> old(7 * n);
   for (std::size_t a = 0; a < 7; ++a) std::copy(arrays[a]->begin(), arrays[a]->end(), &old[a * n]);
   const std::vector<double> old_w = w;
-  const double step = total / static_cast<double>(n);
+  if (m != n) {
+    for (std::vector<float>* a : arrays) a->resize(m);
+    w.resize(m);
+    scratch_.resize(m * 22);
+    scratch_w_.resize(m);
+  }
+  const double step = total / static_cast<double>(m);
   double u = rng_.uniform() * step;
   double cumulative = old_w[0];
   std::size_t k = 0;
-  for (std::size_t j = 0; j < n; ++j) {
+  for (std::size_t j = 0; j < m; ++j) {
     while (u > cumulative && k + 1 < n) cumulative += old_w[++k];
     for (std::size_t a = 0; a < 7; ++a) (*arrays[a])[j] = old[a * n + k];
     w[j] = old_w[k];
     u += step;
   }
+  const std::size_t n_new = m;
   // Keep the quaternions on one hemisphere of the first, so that means need no per-call flip.
-  for (std::size_t j = 0; j < n; ++j) {
+  for (std::size_t j = 0; j < n_new; ++j) {
     if (qw_[j] * qw_[0] + qx_[j] * qx_[0] + qy_[j] * qy_[0] + qz_[j] * qz_[0] < 0.0f) {
       qw_[j] = -qw_[j];
       qx_[j] = -qx_[j];
@@ -375,15 +500,25 @@ void EventSlam3d::reset(const Pose3& start) {
   share_accumulator_ = 0.0;
   since_resample_ = 0;
   have_prev_batch_ = false;
-  motion_ref_set_ = false;
   angular_speed_ = config_.reference_angular_speed;
   linear_speed_ = config_.reference_linear_speed;
+  restartMotion();
   rate_window_open_ = false;
   rate_window_count_ = 0;
   rate_share_ = 1.0;
   health_ = TrackingHealth{};
   health_started_ = false;
+  next_health_sample_us_ = std::numeric_limits<std::int64_t>::min();
+  have_health_sample_ = false;
   above_recover_s_ = 0.0;
+  last_good_ = expected_;
+  keyframes_.clear();
+  keyframes_.push_back(expected_);
+  search_round_ = 0;
+  reseed_rng_state_ = config_.seed ^ 0x9e3779b97f4a7c15ULL;
+  rays_scored_ = 0;
+  rays_unscored_ = 0;
+  share_started_ = false;
   last_t_us_ = std::numeric_limits<std::int64_t>::min();
   gyro_prev_set_ = false;  // gyro samples and bias are kept: they belong to the sensor
   bias_ref_set_ = false;
@@ -426,8 +561,25 @@ EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::si
   for (std::size_t i = 0; i < count; ++i) {
     const Eigen::Vector3f& p = events[i].point;
     const float r2 = p.squaredNorm();  // NaN for a non-finite point, which fails both tests
-    if (!(r2 >= min_r2 && r2 <= max_r2)) {
+    const bool valid = events[i].has_depth ? (r2 >= min_r2 && r2 <= max_r2)
+                                           : (r2 >= 0.81f && r2 <= 1.21f);  // a unit ray (10 %)
+    if (!valid) {
       ++stats.rejected;
+      continue;
+    }
+    {
+      // Share of the valid events without a depth, smoothed over event time.
+      const double dt =
+          share_started_ ? 1e-6 * static_cast<double>(events[i].t_us - share_last_us_) : 0.0;
+      share_started_ = true;
+      share_last_us_ = events[i].t_us;
+      const double x = events[i].has_depth ? 0.0 : 1.0;
+      health_.depthless_share +=
+          (1.0 - std::exp(-dt / config_.rays.share_time_s)) * (x - health_.depthless_share);
+    }
+    if (!events[i].has_depth &&
+        (!config_.rays.enabled || health_.depthless_share < config_.rays.min_depthless_share)) {
+      ++stats.rays_unscored;
       continue;
     }
     if (config_.max_event_rate > 0.0) {
@@ -456,17 +608,66 @@ EventSlam3d::ProcessStats EventSlam3d::process(const PointEvent* events, std::si
     }
     share_accumulator_ -= 1.0;
     batch_end_us_ = events[i].t_us;
+    batch_ray_[in_batch_] = events[i].has_depth ? 0 : 1;
     batch_[in_batch_++] = p;
     ++stats.used;
-    if (in_batch_ == config_.batch_size) runBatch(in_batch_);
+    if (in_batch_ == config_.batch_size) runBatch(in_batch_, stats);
   }
-  if (in_batch_ > 0) runBatch(in_batch_);
+  if (in_batch_ > 0) runBatch(in_batch_, stats);
   rejected_ += stats.rejected;
+  rays_scored_ += stats.rays_scored;
+  rays_unscored_ += stats.rays_unscored;
   return stats;
 }
 
-void EventSlam3d::runBatch(int b) {
+float EventSlam3d::predictRayDepth(const Eigen::Vector3f& ray, float min_value,
+                                   float* value) const {
+  // March from p_* along the ray in steps of a voxel; the depth of the strongest value.
+  const Eigen::Vector3f origin = expected_.position.cast<float>();
+  const Eigen::Vector3f direction = expected_.orientation.cast<float>() * ray;
+  const auto step = static_cast<float>(map_.voxelSize());
+  const auto near = static_cast<float>(std::max(config_.min_range_m, map_.voxelSize()));
+  const auto far = static_cast<float>(std::min(config_.max_range_m, config_.rays.max_depth_m));
+  float best_value = min_value;
+  float best_depth = 0.0f;
+  for (float s = near; s <= far; s += step) {
+    const Eigen::Vector3f q = origin + s * direction;
+    const float v = map_.value(q.x(), q.y(), q.z());
+    if (v > best_value) {
+      best_value = v;
+      best_depth = s;
+    }
+  }
+  if (value != nullptr) *value = best_value;
+  return best_depth;
+}
+
+void EventSlam3d::runBatch(int b, ProcessStats& stats) {
   in_batch_ = 0;
+  // Events without a depth: placed at the depth the map predicts along their ray (at p_*), or
+  // dropped from the batch when nothing is mapped along it.
+  int kept = 0;
+  int rays = 0;
+  for (int j = 0; j < b; ++j) {
+    if (batch_ray_[j] != 0) {
+      const float depth =
+          predictRayDepth(batch_[j], static_cast<float>(config_.rays.min_map_value));
+      if (!(depth > 0.0f)) {
+        ++stats.rays_unscored;
+        --stats.used;
+        continue;
+      }
+      batch_[kept] = depth * batch_[j];
+      ++rays;
+    } else {
+      batch_[kept] = batch_[j];
+    }
+    batch_ray_[kept] = batch_ray_[j];
+    ++kept;
+  }
+  stats.rays_scored += static_cast<std::size_t>(rays);
+  if (kept == 0) return;
+  b = kept;
   // Diffusion: B events' worth (per-event part) plus the event time the batch spans (per-time
   // part), as variances.
   double dt_s = 0.0;
@@ -476,37 +677,61 @@ void EventSlam3d::runBatch(int b) {
   }
   prev_batch_end_us_ = batch_end_us_;
   have_prev_batch_ = true;
-  const double scale_p = diffusionScale(linear_speed_, config_.reference_linear_speed);
-  const double scale_r = diffusionScale(angular_speed_, config_.reference_angular_speed);
+  // While lost the motion is unknown: the largest diffusion.
+  const bool lost = health_.state == TrackingState::kLost;
+  const double scale_p = lost ? config_.diffusion_max_scale
+                              : diffusionScale(linear_speed_, config_.reference_linear_speed);
+  const double scale_r = lost ? config_.diffusion_max_scale
+                              : diffusionScale(angular_speed_, config_.reference_angular_speed);
   const double sp = scale_p * config_.sigma_position_per_sqrt_s;
   const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
   const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
   const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
+  // With the gyro prior active the gyro predicts the rotation; the velocity only the translation.
+  const bool gyro_active = config_.imu.enabled && !gyro_.empty();
+  if (config_.velocity_prediction > 0.0 && !lost && dt_s > 0.0) {
+    const Eigen::Vector3d w = gyro_active
+                                  ? Eigen::Vector3d::Zero()
+                                  : Eigen::Vector3d(config_.velocity_prediction * dt_s *
+                                                    angular_velocity_);
+    const double angle = w.norm();
+    const Eigen::Quaterniond dq(Eigen::AngleAxisd(
+        angle, angle > 0.0 ? Eigen::Vector3d(w / angle) : Eigen::Vector3d::UnitZ()));
+    particles_.predict(dq.cast<float>(),
+                       (config_.velocity_prediction * dt_s * linear_velocity_).cast<float>());
+  }
   // Gyro rotation prior: rotates the particles; the rotation diffusion around it (var_r without).
   const double var_r_batch =
       applyGyroPrior(var_r, b * config_.sigma_rotation_rad * config_.sigma_rotation_rad);
-  const float best =
-      particles_.step(batch_, b, map_, static_cast<float>(std::sqrt(var_p)),
-                      static_cast<float>(std::sqrt(var_r_batch)), batch_decay_[b - 1]);
-  updateHealth(best, b, dt_s);
+  particles_.step(batch_, batch_ray_, b, map_, static_cast<float>(std::sqrt(var_p)),
+                  static_cast<float>(std::sqrt(var_r_batch)), batch_decay_[b - 1],
+                  static_cast<float>(config_.rays.weight));
   processed_ += static_cast<std::uint64_t>(b);
   since_resample_ += b;
   expected_ = particles_.weightedMean();
+  updateHealth(b, dt_s);
   updateGyroBias();
-  updateMotion();
-  // Mapping (eq. 8.9).
-  if (config_.splat == MapSplat3d::kExpectedPose) {
-    const Eigen::Quaternionf q = expected_.orientation.cast<float>();
-    const Eigen::Vector3f t = expected_.position.cast<float>();
-    for (int j = 0; j < b; ++j) splat(batch_[j], q, t, 1.0f);
-  } else {
-    for (int i = 0; i < particles_.size(); ++i) {
-      const auto w = static_cast<float>(particles_.normalisedWeight(i));
-      if (!(w > 0.0f)) continue;
-      const Pose3 p = particles_.particle(i);
-      const Eigen::Quaternionf q = p.orientation.cast<float>();
-      const Eigen::Vector3f t = p.position.cast<float>();
-      for (int j = 0; j < b; ++j) splat(batch_[j], q, t, w);
+  if (health_.state != TrackingState::kLost) updateMotion();
+  // Mapping (eq. 8.9), only while tracking: a pose that does not fit would write a wrong map.
+  if (health_.state == TrackingState::kTracking) {
+    updateKeyframes();
+    if (config_.splat == MapSplat3d::kExpectedPose) {
+      const Eigen::Quaternionf q = expected_.orientation.cast<float>();
+      const Eigen::Vector3f t = expected_.position.cast<float>();
+      for (int j = 0; j < b; ++j) {
+        if (batch_ray_[j] == 0) splat(batch_[j], q, t, 1.0f);
+      }
+    } else {
+      for (int i = 0; i < particles_.size(); ++i) {
+        const auto w = static_cast<float>(particles_.normalisedWeight(i));
+        if (!(w > 0.0f)) continue;
+        const Pose3 p = particles_.particle(i);
+        const Eigen::Quaternionf q = p.orientation.cast<float>();
+        const Eigen::Vector3f t = p.position.cast<float>();
+        for (int j = 0; j < b; ++j) {
+          if (batch_ray_[j] == 0) splat(batch_[j], q, t, w);
+        }
+      }
     }
   }
   if (since_resample_ >= config_.resample_every) {
@@ -520,69 +745,200 @@ double EventSlam3d::diffusionScale(double speed, double reference) const {
                   std::max(config_.diffusion_min_scale, speed / reference));
 }
 
-void EventSlam3d::updateMotion() {
-  // Speeds from the estimate's change over whole windows (not per batch: over a batch of a few
-  // events the change is dominated by the weighted mean's jitter).
-  if (!motion_ref_set_) {
-    motion_ref_set_ = true;
-    motion_ref_pose_ = expected_;
-    motion_ref_us_ = batch_end_us_;
-    return;
-  }
-  const double span_s = 1e-6 * static_cast<double>(batch_end_us_ - motion_ref_us_);
-  if (span_s < config_.motion_window_s) return;
-  const double angle = expected_.orientation.angularDistance(motion_ref_pose_.orientation);
-  const double distance = (expected_.position - motion_ref_pose_.position).norm();
-  // A gap longer than a few windows (no events) says nothing about the speed within it.
-  const double used_s = std::max(span_s, config_.motion_window_s);
-  const double gain =
-      1.0 - std::exp(-std::min(span_s, 4.0 * config_.motion_window_s) / config_.motion_time_s);
-  angular_speed_ += gain * (angle / used_s - angular_speed_);
-  linear_speed_ += gain * (distance / used_s - linear_speed_);
-  motion_ref_pose_ = expected_;
-  motion_ref_us_ = batch_end_us_;
+void EventSlam3d::restartMotion() {
+  motion_window_open_ = false;
+  motion_prev_set_ = false;
+  angular_velocity_.setZero();
+  linear_velocity_.setZero();
 }
 
-void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
+void EventSlam3d::updateMotion() {
+  // Means of the estimate over windows: the rotation as a rotation vector about the window's
+  // reference (the previous window's mean), so that the mean is taken in a flat chart.
+  const double t_s = 1e-6 * static_cast<double>(batch_end_us_);
+  if (!motion_window_open_) {
+    motion_window_open_ = true;
+    motion_ref_ = motion_prev_set_ ? motion_prev_mean_.orientation : expected_.orientation;
+    motion_rotation_sum_.setZero();
+    motion_position_sum_.setZero();
+    motion_time_sum_ = 0.0;
+    motion_count_ = 0;
+    motion_window_start_us_ = batch_end_us_;
+  }
+  Eigen::Quaterniond d = motion_ref_.conjugate() * expected_.orientation;
+  if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+  const Eigen::AngleAxisd aa(d);
+  motion_rotation_sum_ += aa.angle() * aa.axis();
+  motion_position_sum_ += expected_.position;
+  motion_time_sum_ += t_s;
+  ++motion_count_;
+  const double span_s = 1e-6 * static_cast<double>(batch_end_us_ - motion_window_start_us_);
+  if (span_s < config_.motion_window_s) return;
+  const double inv = 1.0 / motion_count_;
+  const Eigen::Vector3d mean_rotation = motion_rotation_sum_ * inv;
+  Pose3 mean;
+  mean.position = motion_position_sum_ * inv;
+  mean.orientation = motion_ref_ * Eigen::Quaterniond(Eigen::AngleAxisd(
+                                       mean_rotation.norm(), mean_rotation.norm() > 0.0
+                                                                 ? mean_rotation.normalized()
+                                                                 : Eigen::Vector3d::UnitZ()));
+  const double mean_t_s = motion_time_sum_ * inv;
+  motion_window_open_ = false;
+  if (motion_prev_set_) {
+    const double dt = mean_t_s - motion_prev_t_s_;
+    if (dt > 0.0) {
+      const double angle = mean.orientation.angularDistance(motion_prev_mean_.orientation);
+      const double distance = (mean.position - motion_prev_mean_.position).norm();
+      // A gap longer than a few windows (no events) says nothing about the speed within it.
+      const double used_s = std::max(dt, config_.motion_window_s);
+      const double gain =
+          1.0 - std::exp(-std::min(dt, 4.0 * config_.motion_window_s) / config_.motion_time_s);
+      angular_speed_ += gain * (angle / used_s - angular_speed_);
+      linear_speed_ += gain * (distance / used_s - linear_speed_);
+      Eigen::Quaterniond d = motion_prev_mean_.orientation.conjugate() * mean.orientation;
+      if (d.w() < 0.0) d.coeffs() = -d.coeffs();
+      const Eigen::AngleAxisd rotation(d);
+      angular_velocity_ = rotation.angle() / used_s * rotation.axis();
+      linear_velocity_ = (mean.position - motion_prev_mean_.position) / used_s;
+    }
+  }
+  motion_prev_mean_ = mean;
+  motion_prev_t_s_ = mean_t_s;
+  motion_prev_set_ = true;
+}
+
+bool EventSlam3d::fitAtEstimate(int b, double* fit, double* mapped_share) {
+  if (batch_end_us_ < next_health_sample_us_) return false;
+  int j = 0;
+  while (j < b && batch_ray_[j] != 0) ++j;
+  if (j == b) return false;
+  next_health_sample_us_ =
+      batch_end_us_ + static_cast<std::int64_t>(1e6 * config_.health.sample_interval_s);
+  // March along the event's ray from p_* to the first mapped surface (the one the sensor sees),
+  // take its peak value, and compare the event's own value (best of +-1 voxel along the ray)
+  // with it.
+  const Eigen::Vector3f& point = batch_[j];
+  const float depth = point.norm();
+  const Eigen::Vector3f origin = expected_.position.cast<float>();
+  const Eigen::Vector3f direction = expected_.orientation.cast<float>() * (point / depth);
+  const auto step = static_cast<float>(map_.voxelSize());
+  const auto min_value = static_cast<float>(config_.health.min_surface_value);
+  const auto near = static_cast<float>(std::max(config_.min_range_m, map_.voxelSize()));
+  const float far =
+      std::max(depth + 10.0f * step,
+               static_cast<float>(std::min(config_.max_range_m, config_.rays.max_depth_m)));
+  float peak = 0.0f;
+  for (float s = near; s <= far; s += step) {
+    const Eigen::Vector3f q = origin + s * direction;
+    const float v = map_.value(q.x(), q.y(), q.z());
+    if (v >= min_value) {
+      peak = v;
+      for (int k = 1; k <= 3; ++k) {  // the surface's peak just behind its first voxel
+        const Eigen::Vector3f r = origin + (s + k * step) * direction;
+        peak = std::max(peak, map_.value(r.x(), r.y(), r.z()));
+      }
+      break;
+    }
+  }
+  if (!(peak > 0.0f)) {  // unexplored along this ray: no evidence
+    *mapped_share = 0.0;
+    return false;
+  }
+  *mapped_share = 1.0;
+  float own = 0.0f;
+  for (int k = -1; k <= 1; ++k) {
+    const Eigen::Vector3f r = origin + (depth + k * step) * direction;
+    own = std::max(own, map_.value(r.x(), r.y(), r.z()));
+  }
+  *fit = std::min(1.0, static_cast<double>(own / peak));
+  return true;
+}
+
+void EventSlam3d::updateHealth(int b, double dt_s) {
   const TrackingHealthConfig& c = config_.health;
   TrackingHealth& h = health_;
   h.ess_share = particles_.essShare();
-  const double fit = static_cast<double>(best_sum) / b;
+  if (h.state == TrackingState::kLost) h.time_lost_s += dt_s;
+  double fit = 0.0, mapped_share = h.mapped_share;  // kept without depth events
+  const bool due = batch_end_us_ >= next_health_sample_us_;
+  const bool evidence = fitAtEstimate(b, &fit, &mapped_share);
+  // Smoothing per sample: the time since the previous one (capped like the diffusion's).
+  const double sample_dt_s =
+      have_health_sample_
+          ? std::min(config_.max_diffusion_dt_s,
+                     1e-6 * static_cast<double>(batch_end_us_ - last_health_sample_us_))
+          : 0.0;
+  const double fast_gain = 1.0 - std::exp(-sample_dt_s / c.fast_time_s);
+  if (due && next_health_sample_us_ > batch_end_us_) {  // a sample was taken
+    h.mapped_share += fast_gain * (mapped_share - h.mapped_share);
+    last_health_sample_us_ = batch_end_us_;
+    have_health_sample_ = true;
+  }
+  // Rays only, or only unexplored space: no evidence either way.
+  if (!evidence) return;
   if (!health_started_) {
     health_started_ = true;
     h.fit_fast = fit;
     h.fit_slow = fit;
     health_start_us_ = batch_end_us_;
   } else {
-    h.fit_fast += (1.0 - std::exp(-dt_s / c.fast_time_s)) * (fit - h.fit_fast);
+    h.fit_fast += fast_gain * (fit - h.fit_fast);
     // Frozen unless tracking: the reference is how well the events fitted while on track.
     if (h.state == TrackingState::kTracking) {
-      h.fit_slow += (1.0 - std::exp(-dt_s / c.slow_time_s)) * (h.fit_fast - h.fit_slow);
+      h.fit_slow += (1.0 - std::exp(-sample_dt_s / c.slow_time_s)) * (h.fit_fast - h.fit_slow);
     }
   }
   h.fit_ratio = h.fit_slow > 0.0 ? h.fit_fast / h.fit_slow : 1.0;
-  if (h.state == TrackingState::kLost) h.time_lost_s += dt_s;
-  if (1e-6 * static_cast<double>(batch_end_us_ - health_start_us_) < c.warmup_s) return;
+  if (1e-6 * static_cast<double>(batch_end_us_ - health_start_us_) < c.warmup_s) {
+    last_good_ = expected_;
+    return;
+  }
+  static_cast<void>(dt_s);
+  const RelocalisationConfig& r = config_.relocalisation;
   switch (h.state) {
     case TrackingState::kTracking:
-      if (h.fit_ratio < c.lost_ratio) {
+      if (h.fit_fast < c.lost_fit) {
         h.state = TrackingState::kLost;
+        h.relocalised = false;
         ++h.lost_count;
+        lost_since_us_ = batch_end_us_;
+        search_round_ = 0;
+        if (r.enabled) reseed();
+      } else if (h.fit_fast >= c.recover_fit) {
+        last_good_ = expected_;
       }
       break;
     case TrackingState::kLost:
-      if (h.fit_ratio >= c.recover_ratio) {
+      if (h.fit_fast >= c.recover_fit) {
         h.state = TrackingState::kRecovering;
         above_recover_s_ = 0.0;
+        // The search found a pose that fits: back to the filter's own particle count.
+        if (particles_.size() != config_.num_particles) {
+          if (!particles_.resampleSystematic(config_.num_particles)) {
+            particles_.reset(config_.num_particles, expected_, config_.seed + search_round_);
+          }
+          since_resample_ = 0;
+        }
+        restartMotion();
+      } else if (r.enabled && batch_end_us_ >= next_reseed_us_) {
+        ++search_round_;
+        reseed();
       }
       break;
     case TrackingState::kRecovering:
-      if (h.fit_ratio < c.lost_ratio) {
+      if (h.fit_fast < c.lost_fit) {
         h.state = TrackingState::kLost;
         ++h.lost_count;
-      } else if (h.fit_ratio >= c.recover_ratio) {
-        above_recover_s_ += dt_s;
-        if (above_recover_s_ >= c.recover_hold_s) h.state = TrackingState::kTracking;
+        if (r.enabled) reseed();
+      } else if (h.fit_fast >= c.recover_fit) {
+        above_recover_s_ += sample_dt_s;
+        if (above_recover_s_ >= c.recover_hold_s) {
+          h.state = TrackingState::kTracking;
+          ++h.relocalisations;
+          h.last_relocalisation_s = 1e-6 * static_cast<double>(batch_end_us_ - lost_since_us_);
+          h.relocalised = true;
+          last_good_ = expected_;
+        }
       } else {
         above_recover_s_ = 0.0;
       }
@@ -590,6 +946,72 @@ void EventSlam3d::updateHealth(float best_sum, int b, double dt_s) {
     case TrackingState::kGlobalSearch:  // EB-PF's state; EB-SLAM-3D never enters it
       break;
   }
+}
+
+void EventSlam3d::updateKeyframes() {
+  if (health_.fit_fast < config_.health.recover_fit) return;
+  const RelocalisationConfig& r = config_.relocalisation;
+  const Pose3& last = keyframes_.back();
+  if ((expected_.position - last.position).norm() < r.keyframe_distance_m &&
+      expected_.orientation.angularDistance(last.orientation) < r.keyframe_angle_rad) {
+    return;
+  }
+  keyframes_.push_back(expected_);
+  if (static_cast<int>(keyframes_.size()) > r.max_keyframes) {
+    // Thin evenly (keeps the newest): the search candidates cover the whole explored space.
+    std::vector<Pose3> thinned;
+    thinned.reserve(keyframes_.size() / 2 + 1);
+    for (std::size_t k = keyframes_.size() % 2 == 0 ? 1 : 0; k < keyframes_.size(); k += 2) {
+      thinned.push_back(keyframes_[k]);
+    }
+    keyframes_ = std::move(thinned);
+  }
+}
+
+void EventSlam3d::reseed() {
+  const RelocalisationConfig& r = config_.relocalisation;
+  next_reseed_us_ = batch_end_us_ + static_cast<std::int64_t>(1e6 * r.interval_s);
+  const double growth = std::pow(r.growth, search_round_);
+  const double sigma_p = std::min(r.max_sigma_position_m, r.sigma_position_m * growth);
+  const double sigma_r = std::min(r.max_sigma_rotation_rad, r.sigma_rotation_rad * growth);
+  // Candidates: the last good pose and the keyframes nearest it (position, plus the angle at
+  // 0.3 m per rad).
+  std::vector<const Pose3*> candidates{&last_good_};
+  std::vector<std::pair<double, std::size_t>> by_distance;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    const double d = (keyframes_[k].position - last_good_.position).norm() +
+                     0.3 * keyframes_[k].orientation.angularDistance(last_good_.orientation);
+    by_distance.emplace_back(d, k);
+  }
+  const auto take = std::min(by_distance.size(), static_cast<std::size_t>(r.candidate_keyframes));
+  std::partial_sort(by_distance.begin(), by_distance.begin() + static_cast<std::ptrdiff_t>(take),
+                    by_distance.end());
+  for (std::size_t k = 0; k < take; ++k) candidates.push_back(&keyframes_[by_distance[k].second]);
+  std::vector<Pose3> poses;
+  poses.reserve(static_cast<std::size_t>(r.particles));
+  const int elite = static_cast<int>(r.elite_share * particles_.size());
+  for (int i : particles_.best(elite)) poses.push_back(particles_.particle(i));
+  std::mt19937_64 rng(reseed_rng_state_);
+  reseed_rng_state_ = rng();
+  std::normal_distribution<double> normal;
+  for (int k = static_cast<int>(poses.size()); k < r.particles; ++k) {
+    // Half of the particles about the last good pose, the rest spread over the keyframes.
+    const std::size_t c = candidates.size() == 1 || k % 2 == 0
+                              ? 0
+                              : 1 + static_cast<std::size_t>(k / 2) % (candidates.size() - 1);
+    const Pose3& centre = *candidates[c];
+    Pose3 p;
+    p.position = centre.position + sigma_p * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    const Eigen::Vector3d v = sigma_r * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    p.orientation = (centre.orientation *
+                     Eigen::Quaterniond(Eigen::AngleAxisd(
+                         v.norm(), v.norm() > 0.0 ? v.normalized() : Eigen::Vector3d::UnitZ())))
+                        .normalized();
+    poses.push_back(p);
+  }
+  particles_.assign(poses);
+  since_resample_ = 0;
+  restartMotion();
 }
 
 void EventSlam3d::splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q,
@@ -651,13 +1073,17 @@ void EventSlam3d::updateGyroBias() {
 // ---- end gyro rotation prior ----
 
 std::size_t EventSlam3d::memoryBytes() const {
-  return map_.memoryBytes() + static_cast<std::size_t>(config_.num_particles) *
-                                  (19 * sizeof(float) + 2 * sizeof(double));
+  return map_.memoryBytes() +
+         static_cast<std::size_t>(particles_.size()) * (22 * sizeof(float) + 2 * sizeof(double)) +
+         keyframes_.capacity() * sizeof(Pose3);
 }
 
 std::size_t EventSlam3d::peakMemoryBytes() const {
-  return map_.peakMemoryBytes() + static_cast<std::size_t>(config_.num_particles) *
-                                      (19 * sizeof(float) + 2 * sizeof(double));
+  const int most = std::max(config_.num_particles,
+                            config_.relocalisation.enabled ? config_.relocalisation.particles : 0);
+  return map_.peakMemoryBytes() +
+         static_cast<std::size_t>(most) * (22 * sizeof(float) + 2 * sizeof(double)) +
+         static_cast<std::size_t>(config_.relocalisation.max_keyframes + 1) * sizeof(Pose3);
 }
 
 }  // namespace ebslam

@@ -1,7 +1,8 @@
 #pragma once
 
 // Synthesised hand-held camera paths for the EB-SLAM-3D evaluation, covering motions the TUM
-// paths lack: a fast full turn about the vertical axis, a low sweep over a floor, fast shaking.
+// paths lack: a fast full turn about the vertical axis, a low sweep over a floor, fast shaking,
+// an orbit about an object at close range.
 // World frame as the TUM freiburg1 motion capture and dedvs_scene.h (z up, floor at z = 0,
 // metres); poses are the camera's optical frame (x right, y down, z forward) in the world. Every
 // path adds a hand tremor (sums of sinusoids with seeded random frequencies and phases).
@@ -23,9 +24,13 @@ enum class HandheldMotion {
   /// 1.3 m high, 35 deg down towards the room's centre; shaking of +-3 cm and +-4 deg at 2.5-4 Hz
   /// on top of a slow drift.
   kShake,
+  /// Orbiting an object on the table (centre (0, 0, 0.85) m) at 0.4-0.8 m, the depth camera's
+  /// near limit: 0.35 m above it, horizontal radius 0.45 +- 0.2 m (period 7 s), always looking at
+  /// it, one revolution every 12 s (30 deg/s), starting on the -x side.
+  kOrbit,
 };
 
-/// "yaw_turn", "floor_sweep", "shake".
+/// "yaw_turn", "floor_sweep", "shake", "orbit".
 const char* toString(HandheldMotion motion);
 /// Inverse of toString; throws std::invalid_argument for another name.
 HandheldMotion handheldMotionFromString(const std::string& name);

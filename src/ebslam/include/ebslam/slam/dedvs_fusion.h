@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -48,6 +49,9 @@ struct FusedEvent {
   Event event;
   float depth_m = 0.0f;   ///< eDVS z [m], NaN without depth
   Eigen::Vector3f point;  ///< eDVS optical frame [m], NaN without depth
+  /// Unit viewing ray of the event's pixel in the eDVS optical frame, also without a depth (an
+  /// event EB-SLAM-3D can score along its ray); NaN outside the sensor.
+  Eigen::Vector3f ray = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   FusionStatus status = FusionStatus::kOk;
 };
 
@@ -84,7 +88,9 @@ class DepthEventFusion {
     std::uint32_t first = 0;
     std::uint16_t count = 0;
     float edvs_z_per_depth_z = 0.0f;  // s = (d - t_z) * this
-    Eigen::Vector3f direction;        // eDVS ray (x, y, 1)
+    // eDVS ray (x, y, 1); NaN where the pixel has no ray
+    Eigen::Vector3f direction = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    Eigen::Vector3f unit = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   };
   struct Frame {
     double t_event_clock_s;

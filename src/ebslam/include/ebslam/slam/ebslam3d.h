@@ -6,7 +6,11 @@
 // inverse, eq. 8.7/8.8); map frame = start pose. Diffusion eq. 8.11-8.15, score alg. 9 (batched
 // as eq. 6.30), map splat sigma = D / (2 lambda f) [m] (eq. 8.9/8.10). Events with a non-finite
 // point or outside [min_range_m, max_range_m] are skipped and counted (rejectedEvents());
-// timestamps going backwards throw std::invalid_argument. Details: docs/ebslam_core.md#eb-slam-3d
+// timestamps going backwards throw std::invalid_argument. Events without a depth (a viewing ray
+// only) are scored along the ray where the map predicts the surface (never mapped). When the
+// tracking state says lost, mapping stops and the filter searches for the pose around the last
+// good pose and the keyframes (poses mapped from), resuming mapping once the events fit again.
+// Details: docs/ebslam_core.md#eb-slam-3d
 
 #include <cstddef>
 #include <cstdint>
@@ -25,12 +29,18 @@
 namespace ebslam {
 
 /// One depth event: time and the 3D point it saw in the sensor's optical frame (x right, y down,
-/// z forward) [m].
+/// z forward) [m]; or, without a depth (has_depth false: the depth camera saw nothing there), the
+/// unit viewing ray of its pixel in the same frame.
 struct PointEvent {
   std::int64_t t_us = 0;  ///< [microseconds], non-decreasing within a stream
-  Eigen::Vector3f point = Eigen::Vector3f::Zero();
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();  ///< [m], or a unit ray without a depth
+  bool has_depth = true;
 };
 using PointEventVector = std::vector<PointEvent>;
+
+/// An event without a depth along `ray` (normalised here; a zero or non-finite ray stays as
+/// given and is rejected by EventSlam3d::process).
+PointEvent rayEvent(std::int64_t t_us, const Eigen::Vector3f& ray);
 
 /// Where events are splatted into the occurrence map.
 enum class MapSplat3d {
@@ -38,16 +48,65 @@ enum class MapSplat3d {
   kAllParticles,  ///< once per particle, weighted by its normalised score (eq. 8.9)
 };
 
-/// Thresholds of the tracking state machine. The fit is the best particle's mean map value per
-/// event; it is smoothed over fast_time_s and compared with its slow average over slow_time_s
-/// (event time), which is frozen while lost (it remembers how well the events fitted before).
+/// Thresholds of the tracking state machine. The fit says whether the events lie where the map
+/// predicts their surface: every sample_interval_s of event time one depth event is followed
+/// along its ray from p_* through the map; where the strongest value along the ray is at least
+/// min_surface_value, the event scores the map value at its own point over that strongest value
+/// (1: on the predicted surface; 0: in front of or behind it, which contradicts the map); rays
+/// through unexplored space (no such value) say nothing. The scores are smoothed over
+/// fast_time_s of event time. Unlike a raw map value the fit does not grow with the map's age
+/// or a surface's texture, and new territory is not taken for a loss.
+/// Why: docs/ebslam_core.md#eb-slam-3d-relocalisation
 struct TrackingHealthConfig {
   double fast_time_s = 0.02;    ///< [s of event time]
-  double slow_time_s = 2.0;     ///< [s of event time]
-  double lost_ratio = 0.3;      ///< fast / slow below this: lost
-  double recover_ratio = 0.6;   ///< fast / slow at or above this: recovering, then tracking
-  double recover_hold_s = 0.5;  ///< [s of event time] above recover_ratio before tracking
+  double slow_time_s = 2.0;     ///< [s of event time] smoothing of fit_slow (reported only)
+  double lost_fit = 0.2;        ///< fit below this: lost
+  double recover_fit = 0.35;    ///< fit at or above this: recovering, then tracking
+  double recover_hold_s = 0.5;  ///< [s of event time] above recover_fit before tracking
   double warmup_s = 0.5;        ///< [s of event time] always tracking while the map is new
+  double min_surface_value = 3.0;
+  double sample_interval_s = 0.0005;  ///< [s of event time]
+};
+
+/// Scoring of events without a depth (thesis 7.2 scores 2D events on the ceiling plane; here the
+/// surface is the map's): the ray is followed from the estimate p_* through the map, the depth of
+/// the strongest map value is taken as the event's depth, and every particle scores the best of
+/// three points one voxel apart around it along its own view of the ray. Rays are never mapped.
+struct RayScoringConfig {
+  /// Off by default: on the tuning runs scoring rays cost accuracy (docs/results/ebslam3d.md).
+  bool enabled = false;
+  double max_depth_m = 4.0;  ///< farthest depth searched along a ray [m]
+  /// A ray whose strongest map value (at p_*) is below this is not scored (nothing mapped there).
+  double min_map_value = 0.5;
+  double weight = 1.0;  ///< a scored ray's weight relative to a depth event's
+  /// Rays are scored only while the share of events without a depth (smoothed over
+  /// share_time_s of event time) is at least this: a fallback for when the depth camera sees
+  /// little, since with depth present rays cost accuracy (docs/results/ebslam3d.md). 0 = always.
+  double min_depthless_share = 0.5;
+  double share_time_s = 0.1;  ///< [s of event time]
+};
+
+/// The search when lost (docs/ebslam_core.md#eb-slam-3d-relocalisation): every interval_s of
+/// event time while lost, the particles are drawn afresh (their count raised to `particles`)
+/// around the last good pose and the keyframes nearest it, the spread growing by `growth` per
+/// round from the initial sigmas up to the max ones (coarse to fine: the filter's resampling
+/// narrows each round onto the pose that fits); the best elite_share are kept. Keyframes: the
+/// estimate while tracking, each keyframe_distance_m or keyframe_angle_rad from the previous
+/// one, at most max_keyframes (beyond, every second one is dropped: memory is bounded).
+struct RelocalisationConfig {
+  bool enabled = true;
+  int particles = 300;
+  double interval_s = 0.25;             ///< [s of event time]
+  double sigma_position_m = 0.05;       ///< first round [m]
+  double sigma_rotation_rad = 0.1;      ///< first round [rad]
+  double growth = 1.5;                  ///< per round
+  double max_sigma_position_m = 0.4;    ///< [m]
+  double max_sigma_rotation_rad = 0.8;  ///< [rad]
+  double elite_share = 0.1;
+  int candidate_keyframes = 8;        ///< keyframes nearest the last good pose searched per round
+  double keyframe_distance_m = 0.1;   ///< [m]
+  double keyframe_angle_rad = 0.175;  ///< [rad] (10 deg)
+  int max_keyframes = 256;
 };
 
 /// Health of the filter after the last batch.
@@ -55,11 +114,22 @@ struct TrackingHealth {
   TrackingState state = TrackingState::kTracking;
   /// Effective sample size of the normalised scores over N, (0, 1].
   double ess_share = 1.0;
-  double fit_fast = 0.0;   ///< smoothed best mean map value per event (see TrackingHealthConfig)
-  double fit_slow = 0.0;   ///< its slow average
-  double fit_ratio = 1.0;  ///< fit_fast / fit_slow (1 while fit_slow is 0)
+  double fit_fast = 0.0;         ///< the fit, smoothed over fast_time_s (see TrackingHealthConfig)
+  double fit_slow = 0.0;         ///< its average over slow_time_s while tracking
+  double fit_ratio = 1.0;        ///< fit_fast / fit_slow (1 while fit_slow is 0)
   std::uint64_t lost_count = 0;  ///< transitions into kLost since the (re)start
   double time_lost_s = 0.0;      ///< [s of event time] spent lost since the (re)start
+  /// Losses ended by tracking again (LOST -> RELOCALISED), and the event time the last one took
+  /// from entering kLost to kTracking [s].
+  std::uint64_t relocalisations = 0;
+  double last_relocalisation_s = 0.0;
+  /// True from a relocalisation's end (back to kTracking after kLost) until the next loss.
+  bool relocalised = false;
+  /// Share of the depth events that fall near a mapped surface at p_* (smoothed over
+  /// fast_time_s): low in unexplored space.
+  double mapped_share = 1.0;
+  /// Share of the valid events that had no depth (smoothed over RayScoringConfig::share_time_s).
+  double depthless_share = 0.0;
 };
 
 /// Gyro rotation prior (used once EventSlam3d::addGyro has delivered samples; without them the
@@ -111,8 +181,17 @@ struct Ebslam3dConfig {
   double diffusion_max_scale = 1.0;
   double reference_angular_speed = 0.5;  ///< [rad/s] speed at which the scale is 1
   double reference_linear_speed = 0.3;   ///< [m/s] speed at which the scale is 1
-  double motion_window_s = 0.25;         ///< [s of event time]
-  double motion_time_s = 0.25;           ///< [s of event time] smoothing of the speeds
+  /// The speeds are the rates between the means of the estimate over consecutive windows of
+  /// motion_window_s (means, not end points: the mean's jitter averages out over a window while a
+  /// shake of a few Hz does not), as magnitudes, smoothed over motion_time_s: a shake raises
+  /// them although it nets no motion. Why: docs/ebslam_core.md#eb-slam-3d-speed
+  double motion_window_s = 0.05;  ///< [s of event time]
+  double motion_time_s = 0.25;    ///< [s of event time] smoothing of the speeds
+  /// Constant-velocity prediction: before each batch every particle is moved by this share of
+  /// the estimate's velocity (from the same window means: rotation rate in the sensor frame,
+  /// linear velocity in the map frame) times the batch's time span; 0 = a pure random walk
+  /// (the thesis). Why: docs/ebslam_core.md#eb-slam-3d-speed
+  double velocity_prediction = 0.0;
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
   double voxel_size_m = 0.02;  ///< occurrence-map voxel edge [m] (thesis: 1 cm)
@@ -125,6 +204,8 @@ struct Ebslam3dConfig {
   std::size_t max_map_bytes = 24u << 20;
   MapSplat3d splat = MapSplat3d::kExpectedPose;
   TrackingHealthConfig health;
+  RayScoringConfig rays;
+  RelocalisationConfig relocalisation;
   Ebslam3dImuConfig imu;
   std::uint64_t seed = 1;  ///< seeds the diffusion noise and the resampling
 
@@ -160,17 +241,27 @@ class ParticleSet3D {
   Eigen::Matrix<double, 6, 6> covariance(const Pose3& mean) const;
 
   /// One batch: diffuse every particle (sigmas already scaled for the batch), score the batch's
-  /// points through its pose against `map` and update its score with `decay`. Returns the
-  /// largest summed map value of the batch over the particles.
-  float step(const Eigen::Vector3f* points, int batch, const ChunkedVoxelMap& map,
-             float sigma_position, float sigma_rotation, const BatchDecay& decay);
+  /// points through its pose against `map` and update its score with `decay`. Points with
+  /// is_ray[j] != 0 (is_ray may be null: none) are depth-less events placed at their predicted
+  /// depth: each scores ray_weight times the best of three points along its ray, one voxel apart.
+  /// Returns the largest summed map value of the batch over the particles.
+  float step(const Eigen::Vector3f* points, const std::uint8_t* is_ray, int batch,
+             const ChunkedVoxelMap& map, float sigma_position, float sigma_rotation,
+             const BatchDecay& decay, float ray_weight = 1.0f);
   /// Effective sample size of the normalised scores over N, (0, 1] (1 if the total is zero).
   double essShare() const;
+  /// Systematic resampling (children keep their parent's score, as in EB-SLAM-2D) to `count`
+  /// particles (0: as many as now). Returns false (and does nothing) when the total score is
+  /// zero or not finite.
+  bool resampleSystematic(int count = 0);
+  /// Moves every particle: q <- q dq (dq in the sensor frame), position += translation.
+  void predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation);
+  /// Replaces every particle by `poses` (at least one), all with score 1 (alg. 9's start).
+  void assign(const std::vector<Pose3>& poses);
+  /// Indices of the `count` highest scores, best first.
+  std::vector<int> best(int count) const;
   /// Rotates every particle by `delta` in its own (sensor) frame: q <- q delta.
   void rotateBody(const Eigen::Quaternionf& delta);
-  /// Systematic resampling (children keep their parent's score, as in EB-SLAM-2D). Returns
-  /// false (and does nothing) when the total score is zero or not finite.
-  bool resampleSystematic();
 
  private:
   std::vector<float> x_, y_, z_, qw_, qx_, qy_, qz_;
@@ -190,6 +281,10 @@ class EventSlam3d {
     std::size_t used = 0;      ///< events scored and mapped
     std::size_t rejected = 0;  ///< non-finite or out-of-range points (skipped)
     std::size_t skipped = 0;   ///< accepted but left out by event_share or max_event_rate
+    /// Of the used: events without a depth scored along their ray, and those not scored (ray
+    /// scoring off, or nothing mapped along the ray).
+    std::size_t rays_scored = 0;
+    std::size_t rays_unscored = 0;
   };
   /// Processes events in order, in batches of B (a trailing partial batch is processed as a
   /// smaller batch with its own decay). Throws std::invalid_argument, processing nothing, if a
@@ -235,6 +330,13 @@ class EventSlam3d {
   double angularSpeed() const { return angular_speed_; }
   double linearSpeed() const { return linear_speed_; }
   std::uint64_t rejectedEvents() const { return rejected_; }
+  /// Events without a depth scored along their ray, and those not scored, since the (re)start.
+  std::uint64_t raysScored() const { return rays_scored_; }
+  std::uint64_t raysUnscored() const { return rays_unscored_; }
+  /// Poses the map was built from, the relocalisation's search candidates (bounded).
+  const std::vector<Pose3>& keyframes() const { return keyframes_; }
+  /// Whether the events of the last batch were mapped (only while tracking).
+  bool mapping() const { return health_.state == TrackingState::kTracking; }
   /// Time of the last event seen [us] (INT64_MIN before the first).
   std::int64_t lastEventTime() const { return last_t_us_; }
   /// Memory of map and particles [bytes], and its peak since construction.
@@ -242,10 +344,19 @@ class EventSlam3d {
   std::size_t peakMemoryBytes() const;
 
  private:
-  void runBatch(int b);
+  void runBatch(int b, ProcessStats& stats);
+  /// Depth along a ray at p_* where the map is strongest (at least min_value; its value in
+  /// *value if given); 0 if nothing that strong is mapped along it.
+  float predictRayDepth(const Eigen::Vector3f& ray, float min_value, float* value = nullptr) const;
   void updateMotion();
+  void restartMotion();
   double diffusionScale(double speed, double reference) const;
-  void updateHealth(float best_sum, int b, double dt_s);
+  /// Fit of one depth event of the batch at p_* (see TrackingHealthConfig), or false when none
+  /// is due or its ray crosses no mapped surface (*mapped_share: 0 in that case, 1 otherwise).
+  bool fitAtEstimate(int b, double* fit, double* mapped_share);
+  void updateHealth(int b, double dt_s);
+  void updateKeyframes();
+  void reseed();
   void splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q, const Eigen::Vector3f& t,
              float weight);
 
@@ -255,14 +366,24 @@ class EventSlam3d {
   std::vector<BatchDecay> batch_decay_;  // index b - 1
   Pose3 expected_;
   Eigen::Vector3f batch_[64];
+  std::uint8_t batch_ray_[64] = {};
   std::int64_t batch_end_us_ = 0;       // time of the batch's last event [us]
   std::int64_t prev_batch_end_us_ = 0;  // of the previous batch (0 before the first)
   bool have_prev_batch_ = false;
-  // Motion estimate for the speed-scaled diffusion: the estimate at the start of the current
-  // window, its time, the smoothed speeds [rad/s], [m/s] (start: the reference speeds, scale 1).
-  Pose3 motion_ref_pose_;
-  std::int64_t motion_ref_us_ = 0;
-  bool motion_ref_set_ = false;
+  // Motion estimate for the speed-scaled diffusion: sums over the current window of the
+  // estimate's rotation vector about motion_ref_ [rad], its position [m] and time [s]; the
+  // previous window's mean; the smoothed speeds [rad/s], [m/s] (start: the reference speeds).
+  Eigen::Quaterniond motion_ref_;
+  Eigen::Vector3d motion_rotation_sum_, motion_position_sum_;
+  double motion_time_sum_ = 0.0;
+  int motion_count_ = 0;
+  std::int64_t motion_window_start_us_ = 0;
+  bool motion_window_open_ = false;
+  Pose3 motion_prev_mean_;
+  Eigen::Vector3d angular_velocity_ = Eigen::Vector3d::Zero();  // sensor frame [rad/s]
+  Eigen::Vector3d linear_velocity_ = Eigen::Vector3d::Zero();   // map frame [m/s]
+  double motion_prev_t_s_ = 0.0;
+  bool motion_prev_set_ = false;
   double angular_speed_ = 0.0;
   double linear_speed_ = 0.0;
   int in_batch_ = 0;
@@ -275,9 +396,23 @@ class EventSlam3d {
   TrackingHealth health_;
   bool health_started_ = false;
   std::int64_t health_start_us_ = 0;
+  std::int64_t next_health_sample_us_ = 0;
+  std::int64_t last_health_sample_us_ = 0;
+  bool have_health_sample_ = false;
   double above_recover_s_ = 0.0;
+  // Relocalisation: the last pose that fitted, keyframes, the loss's start, the search round.
+  Pose3 last_good_;
+  std::vector<Pose3> keyframes_;
+  std::int64_t lost_since_us_ = 0;
+  std::int64_t next_reseed_us_ = 0;
+  int search_round_ = 0;
+  std::uint64_t reseed_rng_state_ = 0;
+  std::int64_t share_last_us_ = 0;  // time of the last event in depthless_share
+  bool share_started_ = false;
   std::uint64_t processed_ = 0;
   std::uint64_t rejected_ = 0;
+  std::uint64_t rays_scored_ = 0;
+  std::uint64_t rays_unscored_ = 0;
   int since_resample_ = 0;
   std::int64_t last_t_us_;
 
