@@ -690,10 +690,9 @@ void EventSlam3d::runBatch(int b, ProcessStats& stats) {
   // With the gyro prior active the gyro predicts the rotation; the velocity only the translation.
   const bool gyro_active = config_.imu.enabled && !gyro_.empty();
   if (config_.velocity_prediction > 0.0 && !lost && dt_s > 0.0) {
-    const Eigen::Vector3d w = gyro_active
-                                  ? Eigen::Vector3d::Zero()
-                                  : Eigen::Vector3d(config_.velocity_prediction * dt_s *
-                                                    angular_velocity_);
+    const Eigen::Vector3d w =
+        gyro_active ? Eigen::Vector3d::Zero()
+                    : Eigen::Vector3d(config_.velocity_prediction * dt_s * angular_velocity_);
     const double angle = w.norm();
     const Eigen::Quaterniond dq(Eigen::AngleAxisd(
         angle, angle > 0.0 ? Eigen::Vector3d(w / angle) : Eigen::Vector3d::UnitZ()));
