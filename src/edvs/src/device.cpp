@@ -163,6 +163,18 @@ EdvsDevice::EdvsDevice(DeviceConfig config, TransportFactory factory)
   pc.format = format_;
   pc.on_bit = config_.on_bit;
   pc.infer_wraps_from_host_time = config_.infer_wraps_from_host_time;
+  // What the line carries tells a backlog from a live stream: a serial line at 8N1, a paced
+  // capture at its rate; TCP has no fixed rate.
+  switch (uri_.scheme) {
+    case DeviceUri::Scheme::kSerial:
+      pc.line_bytes_per_s = uri_.baud / 10.0;
+      break;
+    case DeviceUri::Scheme::kFile:
+      pc.line_bytes_per_s = uri_.file_rate;
+      break;
+    case DeviceUri::Scheme::kTcp:
+      break;
+  }
   parser_ = EventParser(pc);
   buffer_.resize(1 << 16);
 }

@@ -114,6 +114,8 @@ struct Emulator::State {
   std::int64_t previous_device_t = 0;  // for the delta format
   bool previous_valid = false;
   std::uint64_t segment_bytes = 0;
+  double line_credit_bytes = 0;  // line budget not available (time the line spent stalled)
+  bool stalled = false;          // a stall began and its end has not been seen yet
   std::vector<std::uint8_t> event_out;  // encoded events not yet written
   std::size_t event_out_pos = 0;
   std::string control_out;  // echo and replies, written between events
@@ -263,6 +265,7 @@ struct Emulator::State {
   void startSegment(Clock::time_point now) {
     segment_start = now;
     segment_bytes = 0;
+    line_credit_bytes = 0;
     if (sourceHasNext()) segment_source_t0 = next_event->t_us;
     segment_device_t0 = deviceNow(now);
     previous_valid = false;
@@ -352,15 +355,24 @@ struct Emulator::State {
 
   void produceEvents(Clock::time_point now) {
     if (!streaming || frozen || now < stall_until) return;
+    const std::int64_t elapsed_us = microsSince(segment_start, now);
+    if (stalled) {
+      stalled = false;
+      if (config.stall_drains_at_line_rate && config.line_bytes_per_second > 0) {
+        // The budget the line did not use while stalled is gone: the backlog drains at the rate.
+        const double budget = config.line_bytes_per_second * elapsed_us * 1e-6 + 64;
+        line_credit_bytes = std::max(0.0, budget - static_cast<double>(segment_bytes));
+      }
+    }
     if (event_out.size() - event_out_pos > 65536) return;  // the line is backed up
     const double speed = config.speed > 0 ? config.speed : 1.0;
-    const std::int64_t elapsed_us = microsSince(segment_start, now);
     while (sourceHasNext()) {
       const std::int64_t offset = next_event->t_us - segment_source_t0;
       const auto play_offset = static_cast<std::int64_t>(std::llround(offset / speed));
       if (play_offset > elapsed_us) break;
       if (config.line_bytes_per_second > 0) {
-        const double budget = config.line_bytes_per_second * elapsed_us * 1e-6 + 64;
+        const double budget =
+            config.line_bytes_per_second * elapsed_us * 1e-6 + 64 - line_credit_bytes;
         if (static_cast<double>(segment_bytes) >= budget) break;
       }
       ebslam::Event e = *next_event;
@@ -393,6 +405,7 @@ struct Emulator::State {
       sent.push_back(e);
       if (config.stall_after_events && sent.size() == *config.stall_after_events) {
         stall_until = now + std::chrono::milliseconds(config.stall_ms);
+        stalled = true;
         break;
       }
       if (config.vanish_after_events && sent.size() == *config.vanish_after_events) {
@@ -541,6 +554,7 @@ void Emulator::vanish(int return_after_ms) {
 void Emulator::stall(int ms) {
   std::lock_guard<std::mutex> lock(state_->mutex);
   state_->stall_until = Clock::now() + std::chrono::milliseconds(ms);
+  state_->stalled = true;
 }
 
 std::vector<std::string> Emulator::commands() const {

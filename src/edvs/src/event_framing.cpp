@@ -244,16 +244,26 @@ void EventParser::stageOrEmit(const ebslam::Event& e, std::int64_t host_us,
     // Live: the device clock advanced as fast as the host clock over the window, within the
     // jitter of reads. A backlog advances it faster (the line rate over the event rate); a
     // writer or line that hiccups, or that is starved, in the middle of one, slower.
+    // The line saturated over the window: a backlog draining at the line rate, whose device
+    // time advances as fast as the host clock only because the event rate is near the line's.
     const std::int64_t jitter = 2000 + host / 8;
-    if (device <= host + jitter && device >= host - jitter &&
+    if (device <= host + jitter && device >= host - jitter && !saturatedSince(m.host_us) &&
         resolveGap(out, false, false, host_us, false)) {
       return;
     }
   }
-  if (staged_.front().host_us != kNoHost &&
-      host_us - staged_.front().host_us >= config_.max_gap_hold_us) {
+  if (staged_.front().host_us != kNoHost && gapHoldExpired(host_us)) {
     resolveGap(out, true, false, host_us, false);
   }
+}
+
+bool EventParser::gapHoldExpired(std::int64_t now_us) const {
+  const std::int64_t front = staged_.front().host_us;
+  if (now_us - front >= config_.max_backlog_hold_us) return true;
+  // Host time during which a backlog drained does not count: its events were not live.
+  const std::int64_t from =
+      saturated_host_us_ != kNoHost ? std::max(front, saturated_host_us_) : front;
+  return now_us - from >= config_.max_gap_hold_us;
 }
 
 bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,

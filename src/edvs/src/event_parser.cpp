@@ -44,6 +44,32 @@ EventParser::EventParser(const ParserConfig& config)
   if (config_.max_gap_bytes < 0) {
     throw std::invalid_argument("ParserConfig::max_gap_bytes must be >= 0");
   }
+  if (!(config_.line_bytes_per_s >= 0) || !(config_.line_saturation > 0)) {
+    throw std::invalid_argument(
+        "ParserConfig::line_bytes_per_s must be >= 0 and line_saturation > 0");
+  }
+}
+
+void EventParser::noteRead(std::int64_t host_us, std::size_t bytes) {
+  if (!(config_.line_bytes_per_s > 0)) return;
+  if (!reads_.empty() && host_us < reads_.back().host_us) host_us = reads_.back().host_us;
+  reads_.push_back(Read{host_us, bytes});
+  // The span starts at the newest read at least a window old (the bytes after it arrived after
+  // it), or at the oldest read kept.
+  const std::int64_t window = std::max<std::int64_t>(config_.live_window_us, 1000);
+  std::size_t first = 0;
+  while (first + 1 < reads_.size() && reads_[first + 1].host_us <= host_us - window) ++first;
+  reads_.erase(reads_.begin(), reads_.begin() + static_cast<std::ptrdiff_t>(first));
+  std::size_t total = 0;
+  for (std::size_t i = 1; i < reads_.size(); ++i) total += reads_[i].bytes;
+  const double span_s = static_cast<double>(host_us - reads_.front().host_us) * 1e-6;
+  // Slack for a span of a few reads: a USB serial bridge hands over a packet at a time.
+  constexpr double kSlackBytes = 512;
+  if (reads_.size() >= 2 &&
+      static_cast<double>(total) > config_.line_saturation * config_.line_bytes_per_s * span_s +
+                                       kSlackBytes) {
+    saturated_host_us_ = host_us;
+  }
 }
 
 std::uint64_t noiseCount(const ParserStats& stats) {
@@ -69,6 +95,8 @@ void EventParser::restart() {
   held_after_.clear();
   held_idle_.clear();
   previous_read_host_ = kNoHost;
+  reads_.clear();
+  saturated_host_us_ = kNoHost;
   have_last_ = false;
   have_latency_ = false;
   behind_debt_us_ = 0;
@@ -102,12 +130,11 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
   decideAbsolute(true, out);
   // A read found the line idle (or the stream ended): everything the device had queued has
   // arrived, so the newest event is live and the gap can be judged; unless the newest events
-  // were still a backlog (the device clock ran faster than the host clock over them), in which
-  // case the line only hiccuped in the middle of the backlog.
-  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
-      *idle_host_us_ - staged_.front().host_us >= config_.max_gap_hold_us) {
-    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
-  }
+  // were still a backlog (the device clock ran faster than the host clock over them: a late
+  // reader or a draining line), in which case the line only hiccuped in the middle of the
+  // backlog, or the device began to hold its bytes right after it: then their lateness is not
+  // known and the next bytes decide (the backlog that follows a hold continues their clock).
+  bool newest_backlog = false;
   if (judging_gap_ && !staged_.empty()) {
     const Staged& newest = staged_.back();
     const Staged& m = staged_[live_from_].host_us <= newest.host_us - config_.live_window_us
@@ -115,8 +142,21 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
                           : staged_.front();
     const std::int64_t device = newest.event.t_us - m.event.t_us;
     const std::int64_t host = newest.host_us - m.host_us;
-    if (device > host + host / 4 + 4000) return out.size() - before;
+    newest_backlog = device > host + host / 4 + 4000;
   }
+  if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
+      (newest_backlog
+           ? *idle_host_us_ - staged_.front().host_us >= config_.max_backlog_hold_us
+           : gapHoldExpired(*idle_host_us_))) {
+    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
+  }
+  // The line was saturated a moment ago: a backlog is draining and the writer paused in the
+  // middle of it (a device or line releases its backlog in chunks).
+  if (judging_gap_ && !staged_.empty() && idle_host_us_ &&
+      saturatedSince(*idle_host_us_ - config_.live_window_us)) {
+    return out.size() - before;
+  }
+  if (newest_backlog) return out.size() - before;
   // Nothing held ever ran faster than the host clock (a quiet gap, then live events): judged at
   // once. After a backlog, the count must come out the same at the next idle read too (a
   // writer that hiccups or is starved in the middle of a backlog also leaves the line idle).
@@ -204,7 +244,10 @@ std::size_t EventParser::feed(const std::uint8_t* data, std::size_t size,
     held_.insert(held_.end(), data, data + size);
     held_host_.insert(held_host_.end(), size, host_us ? *host_us : kNoHost);
     held_after_.insert(held_after_.end(), size, previous_read_host_);
-    if (host_us && size > 0) previous_read_host_ = *host_us;
+    if (host_us && size > 0) {
+      previous_read_host_ = *host_us;
+      noteRead(*host_us, size);
+    }
     held_idle_.insert(held_idle_.end(), size, idle_epoch_);
     decideAbsolute(false, out);
     return out.size() - before;

@@ -47,6 +47,10 @@ struct EmulatorConfig {
   std::size_t stale_bytes = 0;  ///< bytes of an old stream waiting when the host opens
   std::optional<std::size_t> stall_after_events;   ///< stop sending after this many events...
   int stall_ms = 0;                                ///< ...for this long, then continue
+  /// After a stall the device's clock has run on and its events are queued: false sends the
+  /// whole backlog at once (as a writer that held its bytes), true drains it at the line rate
+  /// (as a serial line does; needs line_bytes_per_second > 0).
+  bool stall_drains_at_line_rate = false;
   std::optional<std::size_t> vanish_after_events;  ///< close the device after this many events
   int return_after_ms = -1;  ///< reappear (new pty, same link) after this long; -1 = never
 

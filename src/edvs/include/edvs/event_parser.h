@@ -47,8 +47,20 @@ struct ParserConfig {
   /// ...and the liveliest of them is at most this much later than the latency floor, beyond
   /// whole periods [us] (the jitter of a live event's latency).
   std::int64_t live_lag_us = 16000;
-  /// ...or until they span this much host time: then the evidence there is decides [us].
+  /// ...or until they span this much host time during which the line was not saturated (see
+  /// line_bytes_per_s): then the evidence there is decides [us].
   std::int64_t max_gap_hold_us = 1000000;
+  /// Rate the line carries [bytes/s] (a serial line at B baud, 8N1: B / 10); 0 = unknown.
+  /// Bytes arriving at line_saturation of this rate or faster over live_window_us of host time
+  /// are a backlog draining (the device held its bytes, the line stalled, or the reader was
+  /// late): the events they carry are not live, so a gap judgement neither counts periods from
+  /// them nor ends on them; the host time they arrive over says nothing about device time.
+  /// A live stream sends at the sensor's event rate, below the line rate.
+  double line_bytes_per_s = 0.0;
+  double line_saturation = 0.8;
+  /// A backlog still draining after this much host time is judged with the evidence there is
+  /// (bounds the memory of the events held) [us].
+  std::int64_t max_backlog_hold_us = 60000000;
   /// Absolute-timestamp formats (E2..E4): an unconfirmed stream (no event published yet, or
   /// every frame after the last published event refused) is taken to have a new clock (device
   /// reset) once this many consecutive frames agree with each other; time continues
@@ -136,7 +148,10 @@ class EventParser {
   /// host_us: host time of the idle read, if known (lets flush() end a gap judgement that has
   /// waited max_gap_hold_us).
   void noteIdle(std::optional<std::int64_t> host_us = std::nullopt) {
-    if (host_us) idle_host_us_ = *host_us;
+    if (host_us) {
+      idle_host_us_ = *host_us;
+      noteRead(*host_us, 0);
+    }
     if (!config_.infer_wraps_from_host_time) return;
     unwrapper_.noteIdle();
     ++idle_epoch_;
@@ -216,6 +231,8 @@ class EventParser {
   // at_once: an idle read after events that never ran ahead of the host clock needs no second.
   bool resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,
                   bool at_once);
+  // The events staged for a gap judgement have waited long enough to be judged by force.
+  bool gapHoldExpired(std::int64_t now_us) const;
 
   std::vector<std::uint8_t> held_;         // bytes after the last published event
   std::vector<std::int64_t> held_host_;    // host time of the read of each held byte
@@ -244,6 +261,18 @@ class EventParser {
   bool gap_candidate_idle_ = false;           // latency of a live event when the gap began
   std::uint32_t idle_epoch_ = 0;
   std::int64_t previous_read_host_ = kNoHost;
+  // Line saturation (ParserConfig::line_bytes_per_s): recent reads with their host times and
+  // sizes; the newest host time at which the line was seen saturated.
+  struct Read {
+    std::int64_t host_us;
+    std::size_t bytes;
+  };
+  std::vector<Read> reads_;
+  std::int64_t saturated_host_us_ = kNoHost;
+  void noteRead(std::int64_t host_us, std::size_t bytes);
+  bool saturatedSince(std::int64_t host_us) const {
+    return saturated_host_us_ != kNoHost && saturated_host_us_ >= host_us;
+  }
   bool mode_decided_ = false;  // set by the first bytes fed
   bool chain_mode_ = false;    // absolute format fed with host times: framing by evidence
   bool have_last_ = false;
