@@ -184,6 +184,7 @@ void EventParser::publishDecoded(std::uint8_t y_byte, std::uint8_t x_byte, const
     judging_gap_ = true;
     live_from_ = 0;
     gap_residual_known_ = false;
+    gap_after_residual_known_ = false;
     gap_candidate_k_ = -1;
     // Latency of a live event: the floor, or before one is known the last event's (an upper
     // bound: fewer periods are then inferred, never more).
@@ -212,11 +213,11 @@ void EventParser::publishDecoded(std::uint8_t y_byte, std::uint8_t x_byte, const
   }
   e.t_us = last_time_us_;
   ++stats_.events;
-  stageOrEmit(e, f.host_us, out);
+  stageOrEmit(e, f.host_us, f.arrived_after_us, out);
 }
 
 void EventParser::stageOrEmit(const ebslam::Event& e, std::int64_t host_us,
-                              ebslam::EventVector& out) {
+                              std::int64_t arrived_after_us, ebslam::EventVector& out) {
   if (!judging_gap_) {
     out.push_back(e);
     return;
@@ -229,6 +230,13 @@ void EventParser::stageOrEmit(const ebslam::Event& e, std::int64_t host_us,
     const std::int64_t residual = host_us - gap_latency_us_ - e.t_us;
     if (!gap_residual_known_ || residual < gap_residual_us_) gap_residual_us_ = residual;
     gap_residual_known_ = true;
+  }
+  if (arrived_after_us != kNoHost) {
+    const std::int64_t after = arrived_after_us - gap_latency_us_ - e.t_us;
+    if (!gap_after_residual_known_ || after > gap_after_residual_us_) {
+      gap_after_residual_us_ = after;
+    }
+    gap_after_residual_known_ = true;
   }
   // Live again: over the last live_window_us of host time the device clock advanced no faster
   // than the host clock (a backlog advances it at the line rate over the event rate).
@@ -267,7 +275,7 @@ bool EventParser::gapHoldExpired(std::int64_t now_us) const {
 }
 
 bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,
-                             bool at_once) {
+                             bool at_once, bool fewest) {
   if (!judging_gap_) return true;
   const std::int64_t period = wrapPeriodUs(config_.format);
   // The least residual belongs to the liveliest event: k periods plus its latency above the
@@ -299,6 +307,16 @@ bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, st
       return false;
     }
   }
+  if (fewest && gap_after_residual_known_ && period > 0) {
+    // Sent live, an event is at most live_lag_us older than its arrival after the read before
+    // its own: at least this many periods.
+    const std::int64_t x =
+        gap_after_residual_us_ - config_.live_lag_us - config_.lead_tolerance_us;
+    const std::int64_t least = x > 0 ? (x + period - 1) / period : 0;
+    k = std::min(k, least);
+  } else if (fewest) {
+    k = 0;
+  }
   gap_candidate_k_ = -1;
   const std::int64_t add = k * period;
   for (const Staged& s : staged_) {
@@ -313,6 +331,7 @@ bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, st
   judging_gap_ = false;
   live_from_ = 0;
   gap_residual_known_ = false;
+  gap_after_residual_known_ = false;
   return true;
 }
 

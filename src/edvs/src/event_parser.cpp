@@ -86,6 +86,7 @@ void EventParser::restart() {
   judging_gap_ = false;
   live_from_ = 0;
   gap_residual_known_ = false;
+  gap_after_residual_known_ = false;
   unwrapper_ =
       TimestampUnwrapper(wrapPeriodUs(config_.format), config_.format == EventFormat::kDelta);
   mode_decided_ = false;
@@ -132,8 +133,9 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
   // arrived, so the newest event is live and the gap can be judged; unless the newest events
   // were still a backlog (the device clock ran faster than the host clock over them: a late
   // reader or a draining line), in which case the line only hiccuped in the middle of the
-  // backlog, or the device began to hold its bytes right after it: then their lateness is not
-  // known and the next bytes decide (the backlog that follows a hold continues their clock).
+  // backlog, or the device began to hold its bytes right after it, or the stream ended: then
+  // how late they are is not known, and a judgement forced by the wait counts the fewest
+  // periods their arrival allows (a late reader, not a quiet device).
   bool newest_backlog = false;
   if (judging_gap_ && !staged_.empty()) {
     const Staged& newest = staged_.back();
@@ -145,10 +147,8 @@ std::size_t EventParser::flush(ebslam::EventVector& out) {
     newest_backlog = device > host + host / 4 + 4000;
   }
   if (judging_gap_ && !staged_.empty() && idle_host_us_ && staged_.front().host_us != kNoHost &&
-      (newest_backlog
-           ? *idle_host_us_ - staged_.front().host_us >= config_.max_backlog_hold_us
-           : gapHoldExpired(*idle_host_us_))) {
-    resolveGap(out, true, true, *idle_host_us_, false);  // waited long enough
+      gapHoldExpired(*idle_host_us_)) {
+    resolveGap(out, true, true, *idle_host_us_, false, newest_backlog);  // waited long enough
   }
   // The line was saturated a moment ago: a backlog is draining and the writer paused in the
   // middle of it (a device or line releases its backlog in chunks).

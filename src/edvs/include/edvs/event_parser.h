@@ -223,14 +223,20 @@ class EventParser {
   // Gap judgement: events published after a gap that may hide wrap periods wait in staged_ with
   // the time the stream alone gives them; once the stream is live again the periods that the
   // host clock shows beyond it are added to all of them (see ParserConfig::live_window_us).
-  void stageOrEmit(const ebslam::Event& e, std::int64_t host_us, ebslam::EventVector& out);
+  // arrived_after_us: host time of the read before the event's own (kNoHost if unknown).
+  void stageOrEmit(const ebslam::Event& e, std::int64_t host_us, std::int64_t arrived_after_us,
+                   ebslam::EventVector& out);
   // Adds the hidden periods to the staged events and emits them; without `force`, only if the
   // liveliest staged event is late by at most live_lag_us beyond whole periods.
   // Without `force`, the count must also come out the same twice (see resolveGap()); `idle`:
   // called after a read found the line idle; now_us: host time of the newest read.
   // at_once: an idle read after events that never ran ahead of the host clock needs no second.
+  // fewest: forced while the newest events are still a late read (a reader that woke late,
+  // then an idle line: the device may have begun to hold its bytes): the fewest periods the
+  // events' arrival after the read before their own allows, instead of the most their
+  // lateness allows.
   bool resolveGap(ebslam::EventVector& out, bool force, bool idle, std::int64_t now_us,
-                  bool at_once);
+                  bool at_once, bool fewest = false);
   // The events staged for a gap judgement have waited long enough to be judged by force.
   bool gapHoldExpired(std::int64_t now_us) const;
 
@@ -254,6 +260,10 @@ class EventParser {
   std::size_t live_from_ = 0;         // staged_ index: the newest at least live_window_us old
   std::int64_t gap_residual_us_ = 0;  // least host time minus latency floor minus event time
   bool gap_residual_known_ = false;
+  // Most host time of the read before an event's own minus latency floor minus event time: the
+  // event arrived after that read, so (sent live) it is at most live_lag_us older.
+  std::int64_t gap_after_residual_us_ = 0;
+  bool gap_after_residual_known_ = false;
   std::int64_t gap_latency_us_ = 0;
   std::int64_t gap_candidate_k_ = -1;  // periods a first live check found, to be confirmed
   std::int64_t gap_candidate_host_ = 0;
