@@ -114,8 +114,8 @@ struct Emulator::State {
   std::int64_t previous_device_t = 0;  // for the delta format
   bool previous_valid = false;
   std::uint64_t segment_bytes = 0;
-  double line_credit_bytes = 0;  // line budget not available (time the line spent stalled)
-  bool stalled = false;          // a stall began and its end has not been seen yet
+  double line_credit_bytes = 0;         // line budget not available (time the line spent stalled)
+  bool stalled = false;                 // a stall began and its end has not been seen yet
   std::vector<std::uint8_t> event_out;  // encoded events not yet written
   std::size_t event_out_pos = 0;
   std::string control_out;  // echo and replies, written between events

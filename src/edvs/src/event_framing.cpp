@@ -310,8 +310,7 @@ bool EventParser::resolveGap(ebslam::EventVector& out, bool force, bool idle, st
   if (fewest && gap_after_residual_known_ && period > 0) {
     // Sent live, an event is at most live_lag_us older than its arrival after the read before
     // its own: at least this many periods.
-    const std::int64_t x =
-        gap_after_residual_us_ - config_.live_lag_us - config_.lead_tolerance_us;
+    const std::int64_t x = gap_after_residual_us_ - config_.live_lag_us - config_.lead_tolerance_us;
     const std::int64_t least = x > 0 ? (x + period - 1) / period : 0;
     k = std::min(k, least);
   } else if (fewest) {

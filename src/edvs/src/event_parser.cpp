@@ -66,8 +66,8 @@ void EventParser::noteRead(std::int64_t host_us, std::size_t bytes) {
   // Slack for a span of a few reads: a USB serial bridge hands over a packet at a time.
   constexpr double kSlackBytes = 512;
   if (reads_.size() >= 2 &&
-      static_cast<double>(total) > config_.line_saturation * config_.line_bytes_per_s * span_s +
-                                       kSlackBytes) {
+      static_cast<double>(total) >
+          config_.line_saturation * config_.line_bytes_per_s * span_s + kSlackBytes) {
     saturated_host_us_ = host_us;
   }
 }

@@ -117,8 +117,8 @@ namespace {
 /// Prophesee in evt3) as eDVS streams at `rate_hz` on average.
 ebslam::EventVector realStream(const std::string& file, double rate_hz) {
   ebslam::SensorSize sensor;
-  const ebslam::EventVector raw =
-      edvs::readRecording(std::string(EDVS_SAMPLE_SESSION_DIR) + "/../event_packets/" + file, sensor);
+  const ebslam::EventVector raw = edvs::readRecording(
+      std::string(EDVS_SAMPLE_SESSION_DIR) + "/../event_packets/" + file, sensor);
   return edvs::edvsStreamFromRecording(raw, sensor, rate_hz);
 }
 
@@ -148,8 +148,8 @@ TEST(ClockStall, DeviceHoldOfARealRecordingKeepsTheClock) {
     device.open();
     device.start();
     const EventVector got = collect(device, ec.events.size(), 5000);
-    const edvs::StreamComparison cmp = check("hold", EventFormat::kAbs16, 300,
-                                             emulator.sentEvents(), got, device);
+    const edvs::StreamComparison cmp =
+        check("hold", EventFormat::kAbs16, 300, emulator.sentEvents(), got, device);
     EXPECT_EQ(cmp.final_error_us, 0);
     EXPECT_EQ(cmp.sent, ec.events.size());
     EXPECT_EQ(device.stats().parser.wraps_from_host_time, 0u);

@@ -153,12 +153,13 @@ int main(int argc, char** argv) {
         for (bool at_line_rate : modes) {
           const HoldResult r =
               runHold(stream, *format, before_ms, hold, after_ms, at_line_rate, baud / 10);
-          const bool exact = r.final_error_us == 0 && r.off_1ms == 0 && r.lost == 0 &&
-                             r.invented == 0;
+          const bool exact =
+              r.final_error_us == 0 && r.off_1ms == 0 && r.lost == 0 && r.invented == 0;
           ok = ok && exact;
           std::printf(
               "%s %s %.0f ev/s hold %d ms backlog %s: sent %zu published %zu lost %zu invented "
-              "%zu final error %lld us, %zu events > 1 ms off (%.1f %%), max error %lld us, first at %.3f s; "
+              "%zu final error %lld us, %zu events > 1 ms off (%.1f %%), max error %lld us, first "
+              "at %.3f s; "
               "wraps from host time %llu, gaps judged %llu: %s\n",
               path.substr(path.find_last_of('/', path.size() - 12) + 1).c_str(),
               edvs::toString(*format), rate, hold, at_line_rate ? "at the line rate" : "at once",

@@ -45,8 +45,8 @@ struct EmulatorConfig {
   /// 1..n-1 bytes are sent (a glitch on the line); they are not in sentEvents().
   std::vector<std::size_t> cut_events;
   std::size_t stale_bytes = 0;  ///< bytes of an old stream waiting when the host opens
-  std::optional<std::size_t> stall_after_events;   ///< stop sending after this many events...
-  int stall_ms = 0;                                ///< ...for this long, then continue
+  std::optional<std::size_t> stall_after_events;  ///< stop sending after this many events...
+  int stall_ms = 0;                               ///< ...for this long, then continue
   /// After a stall the device's clock has run on and its events are queued: false sends the
   /// whole backlog at once (as a writer that held its bytes), true drains it at the line rate
   /// (as a serial line does; needs line_bytes_per_second > 0).
