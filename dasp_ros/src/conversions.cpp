@@ -1,6 +1,5 @@
 #include "dasp_ros/conversions.h"
 
-#include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
@@ -52,9 +51,31 @@ cv::Mat shareImage(const sensor_msgs::Image& image, int expected_type) {
                  const_cast<uint8_t*>(image.data.data()), image.step);
 }
 
+// One copy of the pixels into the message (what cv_bridge::CvImage::toImageMsg writes, without
+// its intermediate message).
 sensor_msgs::Image makeImageMsg(const cv::Mat& mat, const std::string& encoding,
                                 const std_msgs::Header& header) {
-  return *cv_bridge::CvImage(header, encoding, mat).toImageMsg();
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.height = static_cast<uint32_t>(mat.rows);
+  msg.width = static_cast<uint32_t>(mat.cols);
+  msg.encoding = encoding;
+  msg.is_bigendian = 0;
+  const std::size_t row_bytes = static_cast<std::size_t>(mat.cols) * mat.elemSize();
+  msg.step = static_cast<uint32_t>(row_bytes);
+  msg.data.resize(row_bytes * static_cast<std::size_t>(mat.rows));
+  if (mat.isContinuous()) {
+    if (!msg.data.empty()) std::memcpy(msg.data.data(), mat.data, msg.data.size());
+  } else {
+    for (int r = 0; r < mat.rows; ++r) {
+      std::memcpy(msg.data.data() + r * row_bytes, mat.ptr(r), row_bytes);
+    }
+  }
+  return msg;
+}
+
+cv::Mat copyOrShare(const cv::Mat& shared, ImageData data) {
+  return data == ImageData::kShare ? shared : shared.clone();
 }
 
 // The fields dasp::Superpixel and ebslam_msgs::Superpixel share, one list for both directions:
@@ -141,10 +162,10 @@ sensor_msgs::CameraInfo toCameraInfo(const dasp::Intrinsics& intrinsics, int wid
   return info;
 }
 
-cv::Mat toColorMat(const sensor_msgs::Image& image) {
+cv::Mat toColorMat(const sensor_msgs::Image& image, ImageData data) {
   cv::Mat bgr;
   if (image.encoding == enc::BGR8) {
-    bgr = shareImage(image, CV_8UC3).clone();
+    bgr = copyOrShare(shareImage(image, CV_8UC3), data);
   } else if (image.encoding == enc::RGB8) {
     cv::cvtColor(shareImage(image, CV_8UC3), bgr, cv::COLOR_RGB2BGR);
   } else if (image.encoding == enc::BGRA8) {
@@ -160,9 +181,9 @@ cv::Mat toColorMat(const sensor_msgs::Image& image) {
   return bgr;
 }
 
-cv::Mat toDepthMat(const sensor_msgs::Image& image) {
+cv::Mat toDepthMat(const sensor_msgs::Image& image, ImageData data) {
   if (image.encoding == enc::TYPE_16UC1 || image.encoding == enc::MONO16) {
-    return shareImage(image, CV_16UC1).clone();
+    return copyOrShare(shareImage(image, CV_16UC1), data);
   }
   if (image.encoding == enc::TYPE_32FC1) {
     const cv::Mat metres = shareImage(image, CV_32FC1);
@@ -213,11 +234,11 @@ sensor_msgs::Image toLabelImageMsg(const cv::Mat& labels, const std_msgs::Header
   return makeImageMsg(labels, enc::TYPE_32SC1, header);
 }
 
-cv::Mat toLabelMat(const sensor_msgs::Image& image) {
+cv::Mat toLabelMat(const sensor_msgs::Image& image, ImageData data) {
   if (image.encoding != enc::TYPE_32SC1) {
     throw std::invalid_argument("label image encoding '" + image.encoding + "' is not 32SC1");
   }
-  return shareImage(image, CV_32SC1).clone();
+  return copyOrShare(shareImage(image, CV_32SC1), data);
 }
 
 ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& superpixels,
@@ -237,12 +258,12 @@ ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& super
 }
 
 dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
-                                const sensor_msgs::Image& labels) {
+                                const sensor_msgs::Image& labels, ImageData data) {
   if (labels.width != msg.width || labels.height != msg.height) {
     throw std::invalid_argument("label image size does not match the SuperpixelArray size");
   }
   dasp::Superpixels result;
-  result.labels = toLabelMat(labels);
+  result.labels = toLabelMat(labels, data);
   result.superpixels.reserve(msg.superpixels.size());
   for (std::size_t i = 0; i < msg.superpixels.size(); ++i) {
     const ebslam_msgs::Superpixel& in = msg.superpixels[i];

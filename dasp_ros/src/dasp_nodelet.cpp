@@ -126,7 +126,8 @@ class DaspNodelet : public nodelet::Nodelet {
     dasp::Superpixels superpixels;
     dasp::RgbdFrame frame;
     try {
-      frame = input_->convert(*color_msg, *depth_msg, *info_msg);
+      // The frame lives only in this callback, while the messages do: no copy of the images.
+      frame = input_->convert(*color_msg, *depth_msg, *info_msg, ImageData::kShare);
       superpixels = segmenter_->compute(frame);
     } catch (const InputError& e) {
       reject(e.what());

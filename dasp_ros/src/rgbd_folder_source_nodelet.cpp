@@ -16,8 +16,10 @@
 #include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <boost/make_shared.hpp>
 
 #include <optional>
 #include <pluginlib/class_list_macros.hpp>
@@ -100,12 +102,16 @@ class RgbdFolderSourceNodelet : public nodelet::Nodelet {
     header.stamp = ros::Time::now();
     header.frame_id = config_.frame_id;
     ++published_;
-    const sensor_msgs::CameraInfo info =
-        toCameraInfo(frame.intrinsics, frame.color.cols, frame.color.rows, header);
+    // Shared pointers: subscribers in the same nodelet manager get the messages without a
+    // serialisation and a copy of every image.
+    const auto info = boost::make_shared<sensor_msgs::CameraInfo>(
+        toCameraInfo(frame.intrinsics, frame.color.cols, frame.color.rows, header));
     color_info_pub_.publish(info);
     depth_info_pub_.publish(info);
-    color_pub_.publish(toColorImageMsg(frame.color, header));
-    depth_pub_.publish(toDepthImageMsg(frame.depth, header));
+    color_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toColorImageMsg(frame.color, header)));
+    depth_pub_.publish(
+        boost::make_shared<sensor_msgs::Image>(toDepthImageMsg(frame.depth, header)));
   }
 
   // A frame that cannot be published: named with its reason the first time (a throttle would

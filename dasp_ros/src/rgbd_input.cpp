@@ -69,6 +69,19 @@ std::array<std::size_t, 3> RgbdInput::receivedCounts() const {
   return received_;
 }
 
+void RgbdInput::countArrivals(ros::NodeHandle& arrivals_nh) {
+  constexpr uint32_t kQueue = 100;  // the callback only counts: it never falls behind
+  arrivals_sub_ = arrivals_nh.subscribe<Info>(kInfoTopic, kQueue, [this](const auto&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++arrived_;
+  });
+}
+
+std::size_t RgbdInput::arrivedCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return arrived_;
+}
+
 std::size_t RgbdInput::matchedCount() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return matched_;
@@ -112,18 +125,18 @@ std::string RgbdInput::stallReason() {
 
 dasp::RgbdFrame RgbdInput::convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
                                    const sensor_msgs::CameraInfo& info,
-                                   const std::array<std::string, 3>& topics) {
+                                   const std::array<std::string, 3>& topics, ImageData data) {
   const std::string& color_topic = topics[0];
   const std::string& depth_topic = topics[1];
   const std::string& info_topic = topics[2];
   dasp::RgbdFrame frame;
   try {
-    frame.color = toColorMat(color);
+    frame.color = toColorMat(color, data);
   } catch (const std::invalid_argument& e) {
     throw InputError(color_topic, e.what());
   }
   try {
-    frame.depth = toDepthMat(depth);
+    frame.depth = toDepthMat(depth, data);
   } catch (const std::invalid_argument& e) {
     throw InputError(depth_topic, e.what());
   }

@@ -118,7 +118,8 @@ class SdaspNodelet : public nodelet::Nodelet {
     dasp::Superpixels superpixels;
     dasp::SdaspSegmentation result;
     try {
-      superpixels = toSuperpixels(*array, *labels_msg);
+      // Used only in this callback, while the message lives: the labels are not copied.
+      superpixels = toSuperpixels(*array, *labels_msg, ImageData::kShare);
     } catch (const std::invalid_argument& e) {
       reject(labels_topic_ + " does not match " + array_topic_ + ": " + e.what());
       return;

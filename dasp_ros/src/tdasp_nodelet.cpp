@@ -68,12 +68,32 @@ class TdaspNodelet : public nodelet::Nodelet {
         nh, config_.input, [this](const auto& color, const auto& depth, const auto& info) {
           onFrame(color, depth, info);
         });
+    // t-DASP costs about as much as a 30 Hz frame period on one core: when it falls behind, the
+    // frames that arrive meanwhile are skipped (the subscription queues keep the newest), and the
+    // skips are counted here from the camera_infos' arrivals, reported on diagnostics and in a
+    // throttled warning instead of being lost silently.
+    input_->countArrivals(getMTNodeHandle());
     watchdog_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
       const std::string stall = input_->stallReason();
       if (!stall.empty()) NODELET_WARN_THROTTLE(5.0, "%s", stall.c_str());
+      const std::size_t arrived = input_->arrivedCount();
       {
         std::lock_guard<std::mutex> lock(mutex_);
         stall_ = stall;
+        // Frames in the queues are not skipped yet: a skip counts once the arrivals are ahead
+        // by more than the queue.
+        const std::size_t handled =
+            processed_ + rejected_ + static_cast<std::size_t>(config_.input.queue_size);
+        skipped_ = std::max(skipped_, arrived > handled ? arrived - handled : std::size_t{0});
+        if (skipped_ > reported_skipped_) {
+          NODELET_WARN_THROTTLE(
+              10.0,
+              "t-DASP is slower than its input (last frame %.1f ms): %zu of %zu frames skipped "
+              "so far, each output is the newest frame; lower ~superpixel_count or the input "
+              "rate to segment every frame",
+              last_total_ms_, skipped_, arrived);
+          reported_skipped_ = skipped_;
+        }
       }
       updater_->update();
     });
@@ -192,7 +212,9 @@ class TdaspNodelet : public nodelet::Nodelet {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK,
                      processed_ == 0 ? "waiting for RGB-D frames" : "segmenting");
     }
+    status.add("frames arrived", input_->arrivedCount());
     status.add("frames segmented", processed_);
+    status.add("frames skipped while busy", skipped_);
     status.add("frames rejected", rejected_);
     status.add("last rejection", last_error_);
     status.add("stream resets", resets_);
@@ -216,6 +238,7 @@ class TdaspNodelet : public nodelet::Nodelet {
   ros::Time last_stamp_;
   cv::Size last_size_;
   std::size_t processed_ = 0, rejected_ = 0, resets_ = 0, stream_frames_ = 0;
+  std::size_t skipped_ = 0, reported_skipped_ = 0;
   std::int64_t strand_offset_ = 0, label_offset_ = 0, max_strand_ = -1, max_label_ = -1;
   int last_strands_ = 0;
   double last_total_ms_ = 0.0;

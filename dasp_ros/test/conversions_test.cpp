@@ -71,6 +71,27 @@ TEST(Conversions, LabelRoundTrip) {
   EXPECT_TRUE(same(dasp_ros::toLabelMat(dasp_ros::toLabelImageMsg(labels, header())), labels));
 }
 
+// Shared data point into the message (no copy), copied data do not; both equal the image, and a
+// non-continuous Mat (a view) is written row by row like cv_bridge writes it.
+TEST(Conversions, SharedImagesPointIntoTheMessage) {
+  const cv::Mat color = randomImage(6, 5, CV_8UC3, 0, 256, 4);
+  const sensor_msgs::Image color_msg = toColorImageMsg(color, header());
+  const cv::Mat shared = toColorMat(color_msg, dasp_ros::ImageData::kShare);
+  EXPECT_TRUE(same(shared, color));
+  EXPECT_EQ(shared.data, color_msg.data.data());
+  EXPECT_NE(toColorMat(color_msg).data, color_msg.data.data());
+  const cv::Mat depth = randomImage(4, 3, CV_16UC1, 0, 5000, 5);
+  const sensor_msgs::Image depth_msg = dasp_ros::toDepthImageMsg(depth, header());
+  EXPECT_EQ(dasp_ros::toDepthMat(depth_msg, dasp_ros::ImageData::kShare).data,
+            depth_msg.data.data());
+  const cv::Mat labels = randomImage(8, 8, CV_32SC1, -1, 1000, 6);
+  const cv::Mat view = labels(cv::Rect(1, 2, 5, 4));
+  ASSERT_FALSE(view.isContinuous());
+  const sensor_msgs::Image labels_msg = dasp_ros::toLabelImageMsg(view, header());
+  EXPECT_EQ(labels_msg, *cv_bridge::CvImage(header(), "32SC1", view).toImageMsg());
+  EXPECT_TRUE(same(dasp_ros::toLabelMat(labels_msg, dasp_ros::ImageData::kShare), view));
+}
+
 TEST(Conversions, CameraInfoRoundTrip) {
   const dasp::Intrinsics in{525.0f, 526.0f, 319.5f, 239.5f};
   const sensor_msgs::CameraInfo info = dasp_ros::toCameraInfo(in, 640, 480, header());

@@ -163,9 +163,7 @@ SimulatedCalibrationBag writeSimulatedCalibrationBag(
     write_frames(msg.header.stamp.toSec());
     bag.write(topics.events, msg.header.stamp, msg);
     if (messages++ % 10 == 0) {
-      bag.write(topics.edvs_info, msg.header.stamp,
-                toCameraInfoMsg(edvs.width, edvs.height, edvs.focal_px, edvs.focal_px,
-                                edvs.principal_point.x(), edvs.principal_point.y(), msg.header));
+      bag.write(topics.edvs_info, msg.header.stamp, toCameraInfoMsg(edvs, msg.header));
     }
     batch.clear();
   };
@@ -312,8 +310,9 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
   base.depth.cx = info->K[2];
   base.depth.cy = info->K[5];
   base.edvs = options.solve.initial_edvs;
-  base.edvs.width = edvs.width;
-  base.edvs.height = edvs.height;
+  if (base.edvs.width != edvs.width || base.edvs.height != edvs.height) {
+    base.edvs = base.edvs.scaledTo(edvs.width, edvs.height);
+  }
   base.depth_clock_offset_s = pairing_config.depth_clock_offset_s;
   if (out.frame_rate_hz > 0.0) base.depth_frame_rate_hz = out.frame_rate_hz;
 
@@ -321,15 +320,16 @@ BagCalibration calibrateFromBag(const std::string& path, const BagCalibrationOpt
   out.problem = ebslam::diagnoseLedPairing(out.pairing, min_poses, rgbd, out.frame_rate_hz);
   if (!out.problem.empty()) return out;
   ebslam::DedvsCalibrationConfig solve = options.solve;
-  solve.initial_edvs.width = edvs.width;
-  solve.initial_edvs.height = edvs.height;
-  if (solve.initial_edvs.width != 128 || solve.initial_edvs.height != 128) {
-    // eq. 8.6: the optical centre of the sensor
-    solve.initial_edvs.principal_point =
-        Eigen::Vector2d(0.5 * (edvs.width - 1), 0.5 * (edvs.height - 1));
+  if (solve.initial_edvs.width != edvs.width || solve.initial_edvs.height != edvs.height) {
+    // Another event sensor than the initial guess': the same lens on its size (f and the
+    // kappas scale with the pixel pitch, eq. 8.6's centre moves to the sensor's centre).
+    solve.initial_edvs = solve.initial_edvs.scaledTo(edvs.width, edvs.height);
   }
   out.result = ebslam::calibrateDedvs(out.pairing.correspondences, base, solve);
   out.problem = ebslam::adviseCalibration(*out.result);
+  out.coverage = ebslam::ledPoseCoverage(out.pairing.correspondences, edvs.width, edvs.height);
+  out.pose_advice =
+      ebslam::advisePoseDiversity(*out.result, out.coverage, options.max_rotation_std_deg);
   return out;
 }
 

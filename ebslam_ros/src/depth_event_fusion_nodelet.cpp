@@ -5,7 +5,8 @@
 //  - depth_registered/image_raw (sensor_msgs/Image, 16UC1 millimetres or 32FC1 metres, 0/NaN =
 //    no depth), depth_registered/camera_info (sensor_msgs/CameraInfo: checked against the
 //    calibration), the names dasp_ros uses;
-//  - camera_info (sensor_msgs/CameraInfo, the eDVS driver's) with ~edvs_camera_info only.
+//  - camera_info (sensor_msgs/CameraInfo, the event camera driver's, any size and lens) with
+//    ~edvs_camera_info only.
 // Publications:
 //  - depth_events (ebslam_msgs/DepthEventArray): one per EventArray, header.stamp = the input's,
 //    header.frame_id = ~edvs_frame; depth [m] along the eDVS optical axis and the 3D point [m]
@@ -59,6 +60,7 @@
 
 #include "depth_event_fusion_params.h"
 #include "ebslam_msgs/event_conversions.h"
+#include "ebslam_ros/conversions.h"
 #include "ebslam_ros/event_input.h"
 
 namespace ebslam_ros {
@@ -145,37 +147,39 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
   void onEdvsInfo(const sensor_msgs::CameraInfo::ConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (fusion_) return;
-    const double fx = info->K[0], fy = info->K[4];
-    if (info->width == 0 || info->height == 0 || !(fx > 0.0) || !(fy > 0.0) ||
-        std::abs(fx - fy) > 0.01 * fx) {
+    ebslam::DedvsSensors sensors = config_.sensors;
+    try {
+      const ebslam::CameraModel lens = toCameraModel(*info);  // size, f_x, f_y, c and lens
+      bool distorted = false;
+      for (double d : info->D) distorted = distorted || d != 0.0;
+      if (!distorted && (sensors.edvs.kappa1 != 0.0 || sensors.edvs.kappa2 != 0.0) &&
+          !sensors.edvs.hasOpenCvLens()) {
+        // A driver's uncalibrated CameraInfo (zero D): the calibration's kappa lens stays.
+        sensors.edvs.width = lens.width;
+        sensors.edvs.height = lens.height;
+        sensors.edvs.focal_px = lens.fx();
+        sensors.edvs.focal_y_px = lens.fy();
+        sensors.edvs.principal_point = lens.principal_point;
+        NODELET_INFO("eDVS camera_info has no distortion: the calibration's kappa1/kappa2 stay");
+      } else {
+        sensors.edvs = lens;
+      }
+    } catch (const std::invalid_argument& error) {
       ++bad_input_seen_;
       if (due(edvs_info_warned_)) {
-        NODELET_ERROR(
-            "eDVS camera_info unusable (%ux%u, fx %.2f, fy %.2f: need a size and "
-            "fx = fy within 1 %%): waiting for another",
-            info->width, info->height, fx, fy);
+        NODELET_ERROR("eDVS camera_info unusable: %s; waiting for another", error.what());
       }
       return;
-    }
-    ebslam::DedvsSensors sensors = config_.sensors;
-    sensors.edvs.width = static_cast<int>(info->width);
-    sensors.edvs.height = static_cast<int>(info->height);
-    sensors.edvs.focal_px = 0.5 * (fx + fy);
-    sensors.edvs.principal_point = Eigen::Vector2d(info->K[2], info->K[5]);
-    bool distorted = false;
-    for (double d : info->D) distorted = distorted || d != 0.0;
-    if (distorted) {
-      NODELET_WARN(
-          "eDVS camera_info distortion (%s) ignored: the calibration's kappa1/kappa2 "
-          "are used",
-          info->distortion_model.c_str());
     }
     try {
       fusion_.emplace(sensors, config_.fusion);
       config_.sensors = sensors;
-      NODELET_INFO("eDVS intrinsics from camera_info: %dx%d, f %.2f px, centre (%.2f, %.2f)",
-                   sensors.edvs.width, sensors.edvs.height, sensors.edvs.focal_px,
-                   sensors.edvs.principal_point.x(), sensors.edvs.principal_point.y());
+      NODELET_INFO(
+          "eDVS intrinsics from camera_info: %dx%d, f (%.2f, %.2f) px, centre (%.2f, "
+          "%.2f), %s",
+          sensors.edvs.width, sensors.edvs.height, sensors.edvs.fx(), sensors.edvs.fy(),
+          sensors.edvs.principal_point.x(), sensors.edvs.principal_point.y(),
+          info->distortion_model.c_str());
     } catch (const std::exception& error) {
       ++bad_input_seen_;
       if (due(edvs_info_warned_)) NODELET_ERROR("eDVS camera_info unusable: %s", error.what());
@@ -473,6 +477,7 @@ class DepthEventFusionNodelet : public nodelet::Nodelet {
     status.add("EventArrays of a wrong sensor size", rejected_sensor_);
     status.add("EventArrays without eDVS intrinsics", dropped_no_calibration_);
     status.add("calibration", config_.calibration);
+    addDecoderDiagnostics(events_sub_, status);
   }
 
   DepthEventFusionNodeConfig config_;

@@ -18,8 +18,8 @@ struct DepthEventFusionNodeConfig {
   ebslam::DedvsSensors sensors;      ///< read from ~calibration
   ebslam::DepthFusionConfig fusion;  ///< ~min_depth, ~max_depth [m], ~max_frame_age [s],
                                      ///< ~max_surface_jump_ratio, ~frames_kept
-  bool edvs_camera_info = false;     ///< ~edvs_camera_info: eDVS size, focal, centre from
-                                     ///< `camera_info` (kappas stay the calibration's)
+  bool edvs_camera_info = false;     ///< ~edvs_camera_info: event camera size, f, centre and
+                                     ///< lens from `camera_info` (zero D: the kappas stay)
   std::string edvs_frame = "edvs_optical_frame";           ///< ~edvs_frame
   std::string depth_frame = "camera_depth_optical_frame";  ///< ~depth_frame
   bool publish_tf = true;  ///< ~publish_tf: static tf of the calibration's depth_from_edvs

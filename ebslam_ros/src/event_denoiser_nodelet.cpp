@@ -210,6 +210,7 @@ class EventDenoiserNodelet : public nodelet::Nodelet {
     status.add("restarts after time jumps", restarts_);
     status.add("window [s]", 1e-6 * static_cast<double>(config_.filter.window_us));
     status.add("min_support", config_.filter.min_support);
+    addDecoderDiagnostics(events_sub_, status);
   }
 
   EventDenoiserNodeConfig config_;

@@ -1,5 +1,6 @@
 #include "ebslam_ros/event_input.h"
 
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
 #include <ros/master.h>
 #include <ros/names.h>
 #include <ros/this_node.h>
@@ -302,6 +303,19 @@ void EventSubscriber::onPacket(const ebslam_msgs::EventPacket::ConstPtr& msg) {
     callback = callback_;
   }
   callback(events);
+}
+
+void addDecoderDiagnostics(const EventSubscriber& subscriber,
+                           diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const EventSubscriber::Counters c = subscriber.counters();
+  const std::optional<EventInputType> type = subscriber.subscribed();
+  status.add("input type", type ? eventInputTypeName(*type) : "not subscribed");
+  status.add("event packets", c.packets);
+  status.add("events decoded", c.packet_events);
+  status.add("undecodable packets", c.rejected_packets);
+  status.add("undecodable bytes", c.dropped_bytes);
+  status.add("decoded events outside the sensor", c.outside);
+  status.add("decoded events outside ros::Time", c.bad_time);
 }
 
 }  // namespace ebslam_ros

@@ -12,6 +12,7 @@
 #include <memory>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "ceiling_sensor_params.h"
 #include "ebslam_ros/ceiling_map_io.h"
 #include "event_particle_filter_params.h"
 #include "planar_pose_filter_nodelet.h"
@@ -61,8 +62,11 @@ class EventParticleFilterNodelet : public PlanarPoseFilterNodelet {
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "EventParticleFilter " + getName(), [&] {
-      const EventParticleFilterNodeConfig config =
+      EventParticleFilterNodeConfig config =
           loadEventParticleFilterNodeConfig(getPrivateNodeHandle());
+      // The sensor's size and lens from its CameraInfo; the ~camera/* parameters as fallback.
+      resolveCameraInfo(getNodeHandle(), config.node.sensor);
+      logCameraSource(getName(), config.node.sensor);
       const ebslam::CeilingCamera camera(config.node.sensor.camera,
                                          config.node.sensor.ceiling_distance_m);
       const CeilingEdgeMap map = loadCeilingMap(config.map_yaml);

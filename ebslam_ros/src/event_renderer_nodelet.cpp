@@ -5,6 +5,8 @@
 // while subscribed: the events of the last ~accumulation_time seconds of event time, ON in
 // ~on_colour and OFF in ~off_colour ([r, g, b]) over black or the newest `image`; stamp = the
 // newest event's ts, frame = the events' frame. Nothing is published before the first event.
+// Diagnostics: messages, events, images, bad sizes and the decoder's counters.
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <ebslam_ros_common/ros_param_helpers.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
@@ -15,6 +17,7 @@
 
 #include <array>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
 #include <stdexcept>
@@ -44,14 +47,43 @@ class EventRendererNodelet : public nodelet::Nodelet {
     image_sub_ = nh.subscribe("image", 1, &EventRendererNodelet::onImage, this);
     timer_ = nh.createWallTimer(ros::WallDuration(1.0 / config_.publish_rate_hz),
                                 &EventRendererNodelet::render, this);
+    diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, getPrivateNodeHandle());
+    diagnostics_->setHardwareID("none");
+    diagnostics_->add(getName(), this, &EventRendererNodelet::diagnose);
+    diagnostics_timer_ =
+        nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          diagnostics_->update();
+        });
+  }
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    using diagnostic_msgs::DiagnosticStatus;
+    if (rejected_size_ > rejected_size_reported_) {
+      status.summary(DiagnosticStatus::WARN, "bad input since the last report (see the log)");
+    } else if (width_ == 0) {
+      status.summary(DiagnosticStatus::OK, "waiting for events");
+    } else {
+      status.summary(DiagnosticStatus::OK, "rendering");
+    }
+    rejected_size_reported_ = rejected_size_;
+    status.add("messages", messages_);
+    status.add("events received", events_in_);
+    status.add("messages of a bad sensor size", rejected_size_);
+    status.add("images published", images_);
+    status.add("events in the accumulation window", events_.size());
+    addDecoderDiagnostics(events_sub_, status);
   }
 
   void onEvents(const ebslam_msgs::EventArray::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
+    ++messages_;
+    events_in_ += msg->events.size();
     if (msg->events.empty()) return;
     // Bounded so that the rendered image stays small (4096 x 4096 bgr8 = 48 MiB): a bogus size
     // such as 65535 x 65535 would make render() allocate 12 GiB.
     if (msg->width == 0 || msg->height == 0 || msg->width > kMaxSide || msg->height > kMaxSide) {
+      ++rejected_size_;
       NODELET_ERROR_THROTTLE(kWarnPeriodS,
                              "EventArray of a %ux%u sensor ignored: width and height must be in "
                              "1..%u",
@@ -106,6 +138,7 @@ class EventRendererNodelet : public nodelet::Nodelet {
       p[2] = static_cast<std::uint8_t>(rgb[0]);
     }
     image_pub_.publish(image);
+    ++images_;
   }
 
   void drawBackground(const sensor_msgs::Image& in, sensor_msgs::Image& out) {
@@ -146,6 +179,10 @@ class EventRendererNodelet : public nodelet::Nodelet {
   EventInputType input_type_ = EventInputType::kAuto;
   ros::Publisher image_pub_;
   ros::WallTimer timer_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diagnostics_timer_;
+  std::uint64_t messages_ = 0, events_in_ = 0, rejected_size_ = 0, rejected_size_reported_ = 0,
+                images_ = 0;
   EventSubscriber events_sub_;  // last member: stopped before the state its callbacks use
 };
 

@@ -6,7 +6,9 @@
 //  - ground_truth/pose (geometry_msgs/PoseStamped), ground_truth/path (nav_msgs/Path, bounded):
 //    the sensor's optical frame in ~map_frame at each message's end, and the tf
 //    ~map_frame -> ~ground_truth_frame (its own frame, so it never fights the estimators' tf);
-//  - /clock (with ~publish_clock; run the other nodes with use_sim_time).
+//  - /clock (with ~publish_clock; run the other nodes with use_sim_time);
+//  - camera_info (sensor_msgs/CameraInfo, latched, in ~frame_id): the simulated sensor's size
+//    and lens (~camera/*, ~camera/preset), as an event camera driver publishes it.
 // Scene and motion from ~scenario (default: the demo's, in the repository) and the parameters.
 // With ~loop the robot drives ~t_begin..~t_end forth and back endlessly: pass k runs backwards
 // along the path when k is odd (the pose stays continuous) with event seed ~seed + k, and the
@@ -21,6 +23,7 @@
 #include <nodelet/nodelet.h>
 #include <ros/package.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 
 #include <ebslam/events/trajectory.h>
 #include <ebslam/simulation/simulator.h>
@@ -35,6 +38,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "ebslam_ros/conversions.h"
 #include "ebslam_ros/ground_truth_publisher.h"
 #include "ebslam_ros/paced_event_publisher.h"
 #include "event_simulator_params.h"
@@ -70,6 +74,11 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
     events_.emplace(nh, options, stop_, [this](double t_end_s, const ros::Time& stamp) {
       publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
     });
+    camera_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("camera_info", 1, true);
+    std_msgs::Header info_header;
+    info_header.stamp = ros::Time::now();
+    info_header.frame_id = config_.frame_id;
+    camera_info_pub_.publish(toCameraInfoMsg(config_.simulator.camera, info_header));
     NODELET_INFO("simulating '%s'%s%s from %.2f to %.2f s at %.2fx%s%s", config_.trajectory.c_str(),
                  config_.scenario.empty() ? "" : " (scenario ",
                  config_.scenario.empty() ? "" : (config_.scenario + ")").c_str(),
@@ -175,6 +184,7 @@ class EventSimulatorNodelet : public nodelet::Nodelet {
   std::optional<PacedEventPublisher> events_;
   std::optional<GroundTruthPublisher> ground_truth_;
   std::atomic<bool> stop_{false};
+  ros::Publisher camera_info_pub_;
   std::thread worker_;
 };
 

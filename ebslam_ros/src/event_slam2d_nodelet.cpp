@@ -31,6 +31,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <vector>
 
+#include "ceiling_sensor_params.h"
 #include "ebslam_ros/ceiling_map_io.h"
 #include "event_slam2d_params.h"
 #include "planar_pose_filter_nodelet.h"
@@ -55,6 +56,7 @@ class EventSlam2dNodelet : public PlanarPoseFilterNodelet {
     }
     double g0() const override { return slam_.g0(); }
     std::uint64_t processedEvents() const override { return slam_.processedEvents(); }
+    void countUnprocessed(std::uint64_t count) override { slam_.countUnprocessed(count); }
     const ebslam::EventSlam2d& slam() const { return slam_; }
 
    private:
@@ -64,7 +66,10 @@ class EventSlam2dNodelet : public PlanarPoseFilterNodelet {
   void onInit() override {
     // A configuration that cannot work: FATAL and the nodelet is not loaded (ros_param_helpers.h).
     ebslam_ros_common::startOrFail(getPrivateNodeHandle(), "EventSlam2d " + getName(), [&] {
-      const EventSlam2dNodeConfig config = loadEventSlam2dNodeConfig(getPrivateNodeHandle());
+      EventSlam2dNodeConfig config = loadEventSlam2dNodeConfig(getPrivateNodeHandle());
+      // The sensor's size and lens from its CameraInfo; the ~camera/* parameters as fallback.
+      resolveCameraInfo(getNodeHandle(), config.node.sensor);
+      logCameraSource(getName(), config.node.sensor);
       map_period_ = ros::WallDuration(config.map_publish_period_s);
       map_period_on_stamps_ = config.map_period_on_stamps;
       map_frame_ = config.node.map_frame;

@@ -434,6 +434,7 @@ class EventSlam3dNodelet : public PoseFilterNodeletBase {
     status.add("relocalisations", health.relocalisations);
     status.add("last relocalisation [s of event time]", health.last_relocalisation_s);
     status.add("share of events without depth", health.depthless_share);
+    status.add("gaps in the events that started a search", health.event_gaps);
     status.add("events without depth scored along their ray", slam_->raysScored());
     status.add("share of events in mapped space", health.mapped_share);
     status.add("keyframes", slam_->keyframes().size());

@@ -45,6 +45,7 @@ void PlanarPoseFilterNodelet::startFilter(PoseFilterNodeConfig config,
                  static_cast<std::int64_t>(std::llround(config_.max_backward_s * 1e6)),
                  static_cast<std::int64_t>(std::llround(config_.gap_warning_s * 1e6)));
   startOutputs(config_, 10);
+  startRateLimit(config_.rate_limit);
   if (!config_.mount_from_tf) {
     tf2::Quaternion q;
     q.setRPY(config_.mount_rpy[0], config_.mount_rpy[1], config_.mount_rpy[2]);
@@ -345,6 +346,7 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
     pending_seed_.reset();
     pending_global_ = map_localisation_ && config_.initial_pose_unknown;
     if (denoiser_) denoiser_->reset();
+    restartRateLimit();
   }
   if (denoiser_) {
     const std::size_t before = segment.events.size();
@@ -357,7 +359,14 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
     denoiser_passed_ += segment.events.size();
     denoiser_removed_ += before - segment.events.size();
   }
+  // After the denoiser, which needs every event's neighbours: the cap thins what reaches the
+  // filter.
+  // The last pose of a segment carries its last event's time even when the cap dropped that
+  // event (the estimate is then that of the last kept event, microseconds earlier).
+  const std::int64_t segment_end_us = segment.events.empty() ? 0 : segment.events.back().t_us;
+  const std::size_t thinned = limitRate(segment.events);
   if (!backend_) restart(start_pose_);
+  if (thinned > 0) backend_->countUnprocessed(thinned);
   const std::size_t chunk = static_cast<std::size_t>(config_.max_events_per_update);
   for (std::size_t i = 0; i < segment.events.size(); i += chunk) {
     const std::size_t n = std::min(chunk, segment.events.size() - i);
@@ -368,7 +377,8 @@ void PlanarPoseFilterNodelet::processSegment(EventSegment& segment) {
       noteFilterError("filter", n, error);
       continue;
     }
-    publish(ebslam_msgs::toRosTime(segment.events[i + n - 1].t_us));
+    publish(ebslam_msgs::toRosTime(
+        i + n == segment.events.size() ? segment_end_us : segment.events[i + n - 1].t_us));
   }
 }
 
@@ -476,6 +486,7 @@ void PlanarPoseFilterNodelet::diagnoseInput(
     diagnostic_updater::DiagnosticStatusWrapper& status) const {
   status.add("messages of a wrong sensor size", rejected_size_);
   status.add("events outside the sensor", outside_);
+  addDecoderDiagnostics(events_sub_, status);
 }
 
 void PlanarPoseFilterNodelet::diagnoseFilter(

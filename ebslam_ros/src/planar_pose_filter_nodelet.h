@@ -48,6 +48,9 @@ class PoseFilterBackend {
   virtual void setFilterConfig(const ebslam::EventFilterConfig& config) = 0;
   virtual double g0() const = 0;
   virtual std::uint64_t processedEvents() const = 0;
+  /// `count` events of the stream left out before process() (~max_event_rate): a filter that
+  /// measures the stream's event rate (EB-SLAM-2D's noise-aware diffusion) counts them.
+  virtual void countUnprocessed(std::uint64_t /*count*/) {}
 
   // Localisation on a known map (EB-PF); the defaults are those of a filter without one.
   /// Whether reseed / globalLocalisation / applyOdometry work.

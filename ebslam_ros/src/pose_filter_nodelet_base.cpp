@@ -6,6 +6,8 @@
 #include <nav_msgs/Path.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
+#include <algorithm>
+
 #include "ebslam_ros/conversions.h"
 
 namespace ebslam_ros {
@@ -212,6 +214,39 @@ void PoseFilterNodeletBase::publishTf(const Eigen::Isometry3d& map_to_base,
   publishTfOf(map_to_base, stamp);
 }
 
+void PoseFilterNodeletBase::diagnoseRates(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  // Input and processed rates over the last diagnostics period (wall time): a filter that keeps
+  // up processes what arrives; the rate cap's share of dropped events in that period and since
+  // the start.
+  const ros::WallTime now = ros::WallTime::now();
+  const std::uint64_t processed = processedEvents();
+  const RateSnapshot current{now, counters_.events_in, processed, thinned_};
+  const double period_s = last_rates_.time.isZero() ? 0.0 : (now - last_rates_.time).toSec();
+  const auto rate = [period_s](std::uint64_t now_count, std::uint64_t before) {
+    return period_s > 0.0 && now_count >= before
+               ? static_cast<double>(now_count - before) / period_s
+               : 0.0;
+  };
+  const std::uint64_t received =
+      current.events_in - std::min(current.events_in, last_rates_.events_in);
+  const std::uint64_t thinned = current.thinned - std::min(current.thinned, last_rates_.thinned);
+  status.add("input rate [ev/s]", rate(current.events_in, last_rates_.events_in));
+  status.add("processed rate [ev/s]", rate(current.processed, last_rates_.processed));
+  if (rate_limiter_) {
+    status.add("max event rate [ev/s]", rate_limiter_->config().max_rate_eps);
+    status.add("event-time input rate [ev/s]", rate_limiter_->measuredRate());
+    status.add("keep probability", rate_limiter_->keepProbability());
+    status.add("events dropped by the rate cap", thinned_);
+    status.add("dropped share (last period)",
+               received > 0 ? static_cast<double>(thinned) / static_cast<double>(received) : 0.0);
+    status.add("dropped share (since start)",
+               counters_.events_in > 0
+                   ? static_cast<double>(thinned_) / static_cast<double>(counters_.events_in)
+                   : 0.0);
+  }
+  last_rates_ = current;
+}
+
 void PoseFilterNodeletBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   using diagnostic_msgs::DiagnosticStatus;
   if (!mountKnown()) {
@@ -241,6 +276,7 @@ void PoseFilterNodeletBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("events per second of processing",
              processing_s_ > 0.0 ? static_cast<double>(counters_.events_in) / processing_s_ : 0.0);
   status.add("last pose latency [s]", last_latency_s_);
+  diagnoseRates(status);
   diagnoseFilter(status);
 }
 

@@ -30,6 +30,8 @@
 #include <string>
 #include <vector>
 
+#include <ebslam/events/event_rate_limiter.h>
+
 #include "ebslam_ros/log_throttle.h"
 #include "pose_node_params.h"
 
@@ -116,10 +118,30 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
   InputCounters& counters() { return counters_; }
   void addProcessingTime(double seconds) { processing_s_ += seconds; }
 
+  /// Thins the events to `config`'s cap from now on (limitRate); the cap and the dropped share
+  /// then appear on the diagnostics.
+  void startRateLimit(const ebslam::EventRateLimiterConfig& config) {
+    if (config.enabled()) rate_limiter_.emplace(config);
+  }
+  /// ~max_event_rate: thins `events` (time-ordered; any event type with t_us) to the cap before
+  /// the filter, counts and returns how many it dropped. Call on every segment after the input
+  /// checks.
+  template <typename EventVectorT>
+  std::size_t limitRate(EventVectorT& events) {
+    const std::size_t dropped = rate_limiter_ ? rate_limiter_->thinInPlace(events) : 0;
+    thinned_ += dropped;
+    return dropped;
+  }
+  /// Restarts the rate measurement and the thinning's random sequence (a restarted stream).
+  void restartRateLimit() {
+    if (rate_limiter_) rate_limiter_->reset();
+  }
+
  private:
   template <typename Transform>
   void publishTfOf(const Transform& map_to_base, const ros::Time& stamp);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void diagnoseRates(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   const PoseNodeConfig* config_ = nullptr;
   std::mutex mutex_;
@@ -127,6 +149,13 @@ class PoseFilterNodeletBase : public nodelet::Nodelet {
   std::uint64_t bad_input_reported_ = 0;
   double processing_s_ = 0.0;
   double last_latency_s_ = 0.0;
+  // ~max_event_rate; the rates on diagnostics are per second of wall time since the last update.
+  std::optional<ebslam::EventRateLimiter> rate_limiter_;
+  std::uint64_t thinned_ = 0;
+  struct RateSnapshot {
+    ros::WallTime time;
+    std::uint64_t events_in = 0, processed = 0, thinned = 0;
+  } last_rates_;
   // Per-message problems, logged at most every kWarnPeriodS of wall time.
   WallThrottle restart_log_{kWarnPeriodS}, gap_log_{kWarnPeriodS}, zero_time_log_{kWarnPeriodS};
 

@@ -2,7 +2,9 @@
 
 #include <ebslam_ros_common/ros_param_helpers.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -30,6 +32,16 @@ PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& nh) {
   loadPoseNodeConfig(nh, config);
   config.denoise = param<bool>(nh, "denoise", config.denoise);
   config.denoiser = loadBackgroundActivityFilterConfig(ros::NodeHandle(nh, "denoiser"));
+  ebslam::EventRateLimiterConfig& rate = config.rate_limit;
+  rate.max_rate_eps = param<double>(nh, "max_event_rate", rate.max_rate_eps);
+  const double window_s =
+      param<double>(nh, "rate_window", 1e-6 * static_cast<double>(rate.window_us));
+  if (!std::isfinite(window_s)) fail(nh, "rate_window", "must be a number of seconds");
+  rate.window_us = std::llround(std::clamp(window_s, -1.0, 10.0) * 1e6);
+  const int rate_seed = param<int>(nh, "rate_seed", static_cast<int>(rate.seed));
+  if (rate_seed < 0) fail(nh, "rate_seed", "must not be negative");
+  rate.seed = static_cast<std::uint64_t>(rate_seed);
+  validateCore(nh, rate);
   return config;
 }
 

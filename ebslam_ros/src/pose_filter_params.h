@@ -5,6 +5,7 @@
 #include <ros/node_handle.h>
 
 #include <ebslam/events/event_denoiser.h>
+#include <ebslam/events/event_rate_limiter.h>
 #include <ebslam/events/pose.h>
 #include <ebslam/slam/event_filter.h>
 
@@ -12,6 +13,10 @@
 #include "pose_node_params.h"
 
 namespace ebslam_ros {
+
+/// ~max_event_rate's default [events/s]: docs/your_event_camera.md (accuracy cost and the
+/// measurement that chose it).
+constexpr double kDefaultMaxEventRate = 4e5;
 
 /// ROS side of EventParticleFilter and EventSlam2d (frames, mounting, output, input checks in
 /// PoseNodeConfig).
@@ -24,6 +29,11 @@ struct PoseFilterNodeConfig : PoseNodeConfig {
   /// topic hop); its parameters under ~denoiser/ (loadBackgroundActivityFilterConfig).
   bool denoise = false;
   ebslam::BackgroundActivityFilterConfig denoiser;
+  /// ~max_event_rate [events/s of event time, 0 = no cap], ~rate_window [s], ~rate_seed: above
+  /// the cap the events are thinned uniformly (seeded) before the filter, so that a megapixel
+  /// sensor at 1-50 M events/s does not make the filter fall behind
+  /// (ebslam/events/event_rate_limiter.h). EventSlam3d's core has its own cap (Ebslam3dConfig).
+  ebslam::EventRateLimiterConfig rate_limit{kDefaultMaxEventRate, 2000, 1};
 };
 PoseFilterNodeConfig loadPoseFilterNodeConfig(const ros::NodeHandle& private_nh);
 

@@ -1,4 +1,5 @@
-// Simulated D-eDVS (thesis 8.2, ebslam/simulation/dedvs_simulator.h): an eDVS 128x128 and a
+// Simulated D-eDVS (thesis 8.2, ebslam/simulation/dedvs_simulator.h): an eDVS 128x128 (or its lens
+// on another sensor size, ~edvs_preset: davis240, davis346, vga, hd720) and a
 // PrimeSense-like depth camera with registered colour on a hand-held rig moving along a TUM
 // trajectory through a furnished room (ebslam/simulation/dedvs_scene.h). Publications (relative
 // names):
@@ -11,6 +12,8 @@
 //  - ground_truth/pose (geometry_msgs/PoseStamped), ground_truth/path (nav_msgs/Path, bounded):
 //    the rig (the depth optical frame) in ~map_frame at each event message's end, and the tf
 //    ~map_frame -> ~ground_truth_frame;
+//  - camera_info (sensor_msgs/CameraInfo, latched, in ~edvs_frame): the event camera's size and
+//    lens (as its driver publishes them; DepthEventFusion's ~edvs_camera_info reads them);
 //  - /clock (with ~publish_clock; run the other nodes with use_sim_time);
 //  - imu (sensor_msgs/Imu in ~imu_frame, with ~publish_imu): the rig IMU's readings
 //    (ebslam/simulation/imu_simulator.h; angular velocity and linear acceleration with their
@@ -87,6 +90,12 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
       publishGroundTruth(std::min(t_end_s, pass_end_), stamp);
       publishImu(t_end_s + 1.0 / config_.simulator.imu.rate_hz);
     });
+    // The event camera's size and lens (latched), as its driver publishes them.
+    edvs_info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("camera_info", 1, true);
+    std_msgs::Header info_header;
+    info_header.stamp = ros::Time::now();
+    info_header.frame_id = config_.edvs_frame;
+    edvs_info_pub_.publish(toCameraInfoMsg(config_.simulator.edvs, info_header));
     if (config_.publish_imu) startImu(nh);
     NODELET_INFO("simulating the D-eDVS along '%s' from %.2f to %.2f s at %.2fx%s%s (%zu planes)",
                  config_.trajectory.c_str(), t_begin_ - path_.front().t_s,
@@ -269,6 +278,7 @@ class RgbdEventSimulatorNodelet : public nodelet::Nodelet {
   std::size_t next_imu_ = 0;
   std::int64_t last_imu_us_ = std::numeric_limits<std::int64_t>::min();
   std::atomic<bool> stop_{false};
+  ros::Publisher edvs_info_pub_;
   std::thread worker_;
 };
 

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 #include <ebslam_ros_common/ros_param_helpers.h>
 
@@ -38,6 +40,14 @@ RgbdEventSimulatorNodeConfig loadRgbdEventSimulatorNodeConfig(
   if (depth_width != 320 && depth_width != 640) fail(nh, "depth_width", "must be 320 or 640");
   c.simulator.depth.camera = c.simulator.depth.camera.scaled(
       depth_width / static_cast<double>(c.simulator.depth.camera.width));
+  // The event camera: the D-eDVS' eDVS lens scaled to a sensor size (same horizontal field of
+  // view), e.g. davis346.
+  const std::string edvs_preset = param<std::string>(nh, "edvs_preset", "edvs128");
+  try {
+    c.simulator.edvs = ebslam::CameraModel::preset(edvs_preset, c.simulator.edvs);
+  } catch (const std::invalid_argument& e) {
+    fail(nh, "edvs_preset", e.what());
+  }
   c.room.texture_contrast = param<double>(nh, "texture_contrast", c.room.texture_contrast);
   c.simulator.events.noise_rate_hz_per_pixel =
       param<double>(nh, "noise_rate", c.simulator.events.noise_rate_hz_per_pixel);

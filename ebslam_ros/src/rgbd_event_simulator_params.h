@@ -29,7 +29,8 @@ struct RgbdEventSimulatorNodeConfig {
   /// ~loop: drive ~t_begin..~t_end forth and back endlessly (pass k backwards when k is odd, event
   /// and depth-noise seeds ~seed + k, the same room), the time running on; false: one pass.
   bool loop = false;
-  /// ~seed (events, depth noise), ~depth_width (320 or 640), ~noise_rate [Hz per pixel],
+  /// ~seed (events, depth noise), ~depth_width (320 or 640), ~edvs_preset (edvs128, davis240,
+  /// davis346, vga, hd720: the eDVS lens scaled to that size), ~noise_rate [Hz per pixel],
   /// ~depth_rate [Hz], ~depth_clock_offset [s]; the rest the core's defaults
   ebslam::DedvsSimulatorConfig simulator;
   ebslam::RoomSceneConfig room;  ///< ~seed (furniture, textures), ~texture_contrast

@@ -58,6 +58,94 @@ TEST(Conversions, EmptyImageIsRefused) {
   EXPECT_THROW(toImageMsg(cv::Mat(), "mono8", header()), std::invalid_argument);
 }
 
+TEST(Conversions, EveryEventCameraLensRoundTripsThroughCameraInfo) {
+  ebslam::CameraModel plumb = ebslam::CameraModel::preset("davis346");
+  plumb.focal_y_px = plumb.focal_px * 1.01;
+  plumb.distortion_model = ebslam::DistortionModel::kPlumbBob;
+  plumb.lens_coefficients = {-0.3, 0.1, 0.001, -0.002, -0.01};
+  ebslam::CameraModel fisheye = ebslam::CameraModel::preset("hd720");
+  fisheye.distortion_model = ebslam::DistortionModel::kEquidistant;
+  fisheye.lens_coefficients = {-0.02, 0.004, -0.001, 0.0002, 0.0};
+  ebslam::CameraModel thesis;  // eq. 6.3 kappas
+  thesis.kappa1 = -1e-3;
+  thesis.kappa2 = 1e-6;
+  ebslam::CameraModel eq81 = thesis;
+  eq81.distortion_model = ebslam::DistortionModel::kDivideEq81;
+  eq81.kappa1 = 6e-4;
+  for (const ebslam::CameraModel& c : {plumb, fisheye, thesis, eq81}) {
+    const sensor_msgs::CameraInfo info = toCameraInfoMsg(c, header());
+    EXPECT_EQ(info.header.frame_id, "camera_depth_optical_frame");
+    EXPECT_EQ(info.width, static_cast<std::uint32_t>(c.width));
+    EXPECT_EQ(info.K[4], c.fy());
+    const ebslam::CameraModel back = toCameraModel(info);
+    EXPECT_EQ(back.width, c.width);
+    EXPECT_EQ(back.height, c.height);
+    EXPECT_EQ(back.fx(), c.fx());
+    EXPECT_EQ(back.fy(), c.fy());
+    EXPECT_EQ(back.principal_point, c.principal_point);
+    EXPECT_EQ(back.distortion_model, c.distortion_model) << info.distortion_model;
+    if (c.hasOpenCvLens()) {
+      for (std::size_t i = 0; i < info.D.size(); ++i) {
+        EXPECT_EQ(back.lens_coefficients[i], c.lens_coefficients[i]);
+      }
+    } else {
+      EXPECT_EQ(back.kappa1, c.kappa1);
+      EXPECT_EQ(back.kappa2, c.kappa2);
+    }
+    // Same rays everywhere.
+    for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(c.width - 1, 3)}) {
+      EXPECT_EQ(*back.backprojectRay(pixel), *c.backprojectRay(pixel));
+    }
+  }
+  EXPECT_EQ(toCameraInfoMsg(plumb, header()).distortion_model, "plumb_bob");
+  EXPECT_EQ(toCameraInfoMsg(fisheye, header()).D.size(), 4u);
+  EXPECT_EQ(toCameraInfoMsg(fisheye, header()).distortion_model, "equidistant");
+}
+
+TEST(Conversions, CameraInfoAUserWouldSendIsReadOrRefusedByName) {
+  sensor_msgs::CameraInfo info = toCameraInfoMsg(346, 260, 250.0, 250.0, 172.5, 129.5, header());
+  EXPECT_NO_THROW(toCameraModel(info));
+  info.D.clear();  // plumb_bob without coefficients: a pinhole
+  EXPECT_TRUE(toCameraModel(info).isSquarePinhole());
+  info.distortion_model = "rational_polynomial";
+  info.D = {-0.1, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(toCameraModel(info).distortion_model, ebslam::DistortionModel::kPlumbBob);
+  const auto refused = [](const sensor_msgs::CameraInfo& bad, const std::string& word) {
+    try {
+      toCameraModel(bad);
+      ADD_FAILURE() << "accepted: " << word;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  sensor_msgs::CameraInfo bad = info;
+  bad.D[5] = 0.3;
+  refused(bad, "k4..k6");
+  bad = info;
+  bad.distortion_model = "kannala_brandt";
+  refused(bad, "unknown distortion model");
+  bad = info;
+  bad.distortion_model = "plumb_bob";
+  bad.D = {0.1, 0.2};
+  refused(bad, "coefficients in D");
+  bad = info;
+  bad.width = 0;  // an uncalibrated camera_info_manager default
+  refused(bad, "width");
+  bad = info;
+  bad.K[0] = std::nan("");
+  refused(bad, "K is not finite");
+  bad = info;
+  bad.K[1] = 0.5;
+  refused(bad, "skew");
+  bad = info;
+  bad.binning_x = 2;
+  refused(bad, "binning");
+  bad = info;
+  bad.distortion_model = "plumb_bob";
+  bad.D = {-3.0, 0.0, 0.0, 0.0, 0.0};  // folds inside the sensor
+  refused(bad, "cannot be inverted");
+}
+
 TEST(Conversions, CameraInfoOfARectifiedPinhole) {
   const sensor_msgs::CameraInfo info =
       toCameraInfoMsg(320, 240, 285.5, 286.0, 159.5, 119.25, header());

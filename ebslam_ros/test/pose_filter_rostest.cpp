@@ -20,6 +20,7 @@
 #include <ros/package.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2/utils.h>
 #include <tf2_ros/transform_listener.h>
@@ -37,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include <ebslam/events/event_rate_limiter.h>
 #include <ebslam/slam/ceiling_camera.h>
 #include <ebslam/slam/ebpf.h>
 #include <ebslam/slam/ebslam2d.h>
@@ -733,10 +735,207 @@ TEST(KnobsAcrossRestarts, AKnobChangeLastsUntilTheNodeStops) {
   EXPECT_FALSE(p.hasParam("g0")) << "a knob value no one set stayed on the server";
 }
 
+// ~max_event_rate: a second EventSlam2d loaded into the manager with a cap of 250k events/s gets
+// a 1 M events/s stream (30 messages of 10 ms): its poses equal the core run here on the same
+// messages thinned by ebslam::EventRateLimiter with the node's cap and ~rate_seed (the thinning
+// is deterministic and independent of the node), each stamped with the message's last event, and
+// /diagnostics reports the cap, the dropped events and the keep probability.
+TEST(RateCap, ThinsAsTheCoreDoesAndReportsIt) {
+  bool rate_cap_test = false;
+  ros::param::get("~rate_cap_test", rate_cap_test);
+  if (!rate_cap_test) GTEST_SKIP() << "only in event_slam2d.test";
+  ros::NodeHandle nh;
+  const std::string name = "/rate_slam";
+  ros::NodeHandle p(name);
+  p.setParam("initial_pose", std::vector<double>{kStartX, kStartY, kStartTheta});
+  p.setParam("mount_xyz", std::vector<double>{kMountX, 0.0, 0.3});
+  p.setParam("map_size", 20.0);
+  p.setParam("max_event_rate", 250000.0);
+  p.setParam("rate_seed", 5);
+  p.setParam("publish_tf", false);  // the fixture's filter owns map -> odom
+  nodelet::NodeletLoad load;
+  load.request.name = name;
+  load.request.type = "ebslam_ros/EventSlam2d";
+  for (const std::string topic : {"events", "pose", "particles", "particlecloud", "path", "reset",
+                                  "map", "map/image", "map/normalisation", "save_map"}) {
+    load.request.remap_source_args.push_back("/" + topic);
+    load.request.remap_target_args.push_back(name + "/" + topic);
+  }
+  ros::Publisher events_pub = nh.advertise<ebslam_msgs::EventArray>(name + "/events", 100);
+  std::vector<geometry_msgs::PoseWithCovarianceStamped> poses;
+  ros::Subscriber pose_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+      name + "/pose", 100,
+      [&](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) { poses.push_back(*m); });
+  std::map<std::string, std::string> values;
+  ros::Subscriber diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+        for (const auto& status : m->status) {
+          if (status.name.find("rate_slam") == std::string::npos) continue;
+          for (const auto& kv : status.values) values[kv.key] = kv.value;
+        }
+      });
+  ASSERT_TRUE(ros::service::call("/manager/load_nodelet", load) && load.response.success);
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return events_pub.getNumSubscribers() > 0 && pose_sub.getNumPublishers() > 0; }, 20.0));
+  ros::WallDuration(0.3).sleep();
+
+  const std::vector<std::pair<int, int>> pixels = edgePixels(kStartX, kStartY, kStartTheta);
+  constexpr int kMessages = 30;
+  std::vector<ebslam_msgs::EventArray> sent;
+  for (int k = 0; k < kMessages; ++k) {
+    ebslam_msgs::EventArray msg;
+    msg.header.frame_id = "edvs_optical_frame";
+    msg.width = msg.height = 128;
+    msg.events.resize(10000);  // 1 event per us
+    for (std::size_t i = 0; i < msg.events.size(); ++i) {
+      const auto& px = pixels[(static_cast<std::size_t>(k) * 10000 + i) % pixels.size()];
+      msg.events[i].x = static_cast<std::uint16_t>(px.first);
+      msg.events[i].y = static_cast<std::uint16_t>(px.second);
+      msg.events[i].polarity = (i & 1u) != 0;
+      msg.events[i].ts = ebslam_msgs::toRosTime(kT0 + 10000 * k + static_cast<std::int64_t>(i));
+    }
+    msg.header.stamp = msg.events.back().ts;
+    sent.push_back(msg);
+    events_pub.publish(msg);
+    ASSERT_TRUE(ebslam_ros_test::spinUntil(
+        [&] { return poses.size() == static_cast<std::size_t>(k + 1); }, 10.0))
+        << "no pose for message " << k;
+  }
+
+  ebslam::Ebslam2dConfig config;
+  config.map_size_m = 20.0;
+  ebslam::EventRateLimiterConfig cap;
+  cap.max_rate_eps = 250000.0;
+  cap.seed = 5;
+  ebslam::EventRateLimiter limiter(cap);
+  const ebslam::Pose2 mount{kMountX, 0.0, 0.0};
+  ebslam::EventSlam2d core(config, ebslam::CeilingCamera(ebslam::CameraModel{}, 2.59),
+                           ebslam::compose(ebslam::Pose2{kStartX, kStartY, kStartTheta}, mount));
+  std::size_t dropped = 0;
+  for (int k = 0; k < kMessages; ++k) {
+    ebslam::EventVector events = ebslam_msgs::fromMsg(sent[static_cast<std::size_t>(k)]);
+    const std::size_t thinned = limiter.thinInPlace(events);
+    dropped += thinned;
+    ASSERT_FALSE(events.empty());
+    core.countUnprocessed(thinned);  // as the node: noise_aware_diffusion counts them
+    core.process(events);
+    const geometry_msgs::Pose expected =
+        ebslam_ros::toPoseMsg(ebslam::compose(core.estimate(), ebslam::inverse(mount)));
+    const auto& node = poses[static_cast<std::size_t>(k)];
+    EXPECT_EQ(node.header.stamp, sent[static_cast<std::size_t>(k)].events.back().ts) << k;
+    EXPECT_EQ(node.pose.pose.position.x, expected.position.x) << "message " << k;
+    EXPECT_EQ(node.pose.pose.position.y, expected.position.y) << "message " << k;
+    EXPECT_EQ(node.pose.pose.orientation.z, expected.orientation.z) << "message " << k;
+  }
+  // About 3/4 of the 300000 events dropped (the first window, before the rate is known, keeps
+  // twice the cap).
+  EXPECT_GT(dropped, 200000u);
+  EXPECT_LT(dropped, 230000u);
+  ASSERT_TRUE(ebslam_ros_test::spinUntil(
+      [&] { return values["events dropped by the rate cap"] == std::to_string(dropped); }, 5.0))
+      << "diagnostics report " << values["events dropped by the rate cap"] << " dropped, the core "
+      << dropped;
+  EXPECT_DOUBLE_EQ(std::stod(values["max event rate [ev/s]"]), 250000.0);
+  EXPECT_NEAR(std::stod(values["keep probability"]), limiter.keepProbability(), 1e-6);
+  EXPECT_NEAR(std::stod(values["keep probability"]), 0.25, 0.01);
+  EXPECT_NEAR(std::stod(values["dropped share (since start)"]), dropped / 300000.0, 1e-6);
+  EXPECT_EQ(values["events processed"], std::to_string(300000 - dropped));
+  nodelet::NodeletUnload unload;
+  unload.request.name = name;
+  EXPECT_TRUE(ros::service::call("/manager/unload_nodelet", unload) && unload.response.success);
+}
+
 // A map that does not exist or is not an image: the nodelet says why and refuses to load; the
 // manager process lives on. The test loads the two nodelets itself (the manager's load_nodelet
 // service), after subscribing to /rosout, so that it sees their error messages: a test that
 // only found the topics missing would pass with nodelets that never loaded.
+// The sensor's geometry from sensor_msgs/CameraInfo, not from ~camera/* (which say 128x128): a
+// filter loaded beside a latched camera_info of a DAVIS346 (plumb_bob), and one with
+// ~camera_info_url naming a DAVIS346 calibration file, process 346x260 messages whose events all
+// lie beyond column 128 (a 128x128 filter has nothing to process in them and publishes no pose)
+// and drop 128x128 messages.
+TEST(CameraInfoGeometry, SizeAndLensComeFromCameraInfo) {
+  bool camera_info_test = false;
+  ros::param::get("~camera_info_test", camera_info_test);
+  if (!camera_info_test) GTEST_SKIP() << "only in event_particle_filter.test";
+  ros::NodeHandle nh;
+  ASSERT_TRUE(ros::service::waitForService("/manager/load_nodelet", ros::Duration(30.0)));
+  const std::string data = ros::package::getPath("ebslam_ros") + "/test/data/";
+  sensor_msgs::CameraInfo info;
+  info.header.frame_id = "davis_optical_frame";
+  info.width = 346;
+  info.height = 260;
+  info.distortion_model = "plumb_bob";
+  info.D = {-0.12, 0.03, 0.0005, -0.0004, 0.0};
+  info.K = {233.4, 0.0, 172.5, 0.0, 233.0, 129.5, 0.0, 0.0, 1.0};
+  info.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  info.P = {233.4, 0.0, 172.5, 0.0, 0.0, 233.0, 129.5, 0.0, 0.0, 0.0, 1.0, 0.0};
+  ros::Publisher info_pub =
+      nh.advertise<sensor_msgs::CameraInfo>("/info_topic/camera_info", 1, true);
+  info_pub.publish(info);
+  std::int64_t t_us = g_next_t + 1000000;
+  for (const std::string ns : {"/info_topic", "/info_url"}) {
+    SCOPED_TRACE(ns);
+    const std::string name = ns + "/ebpf";
+    ros::param::set(name + "/map", data + "ceiling_lines.yaml");
+    ros::param::set(name + "/initial_pose", std::vector<double>{0.1, -0.2, 0.3});
+    ros::param::set(name + "/mount_xyz", std::vector<double>{0.1, 0.0, 0.3});
+    ros::param::set(name + "/num_particles", 20);
+    ros::param::set(name + "/publish_tf", false);
+    ros::param::set(name + "/map_frame", ns.substr(1) + "_map");
+    ros::param::set(name + "/sensor_frame", "davis_optical_frame");
+    ros::param::set(name + "/camera/width", 128);  // the fallback, overridden by CameraInfo
+    if (ns == "/info_url") {
+      ros::param::set(name + "/camera_info_url", "file://" + data + "davis346_camera_info.yaml");
+    }
+    std::vector<geometry_msgs::PoseWithCovarianceStamped> poses;
+    ros::Subscriber pose_sub = nh.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+        ns + "/pose", 100,
+        [&](const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& m) { poses.push_back(*m); });
+    ros::Publisher events_pub = nh.advertise<ebslam_msgs::EventArray>(ns + "/events", 100);
+    nodelet::NodeletLoad load;
+    load.request.name = name;
+    load.request.type = "ebslam_ros/EventParticleFilter";
+    ASSERT_TRUE(ros::service::call("/manager/load_nodelet", load)) << "the filter did not load";
+    ASSERT_TRUE(
+        ebslam_ros_test::spinUntil([&] { return events_pub.getNumSubscribers() > 0; }, 10.0));
+    ros::WallDuration(0.3).sleep();
+    const auto message = [&](std::uint32_t width, std::uint32_t height) {
+      ebslam_msgs::EventArray msg;
+      msg.header.frame_id = "davis_optical_frame";
+      msg.width = width;
+      msg.height = height;
+      std::mt19937 rng(7);
+      for (int i = 0; i < 600; ++i) {
+        ebslam_msgs::Event e;
+        e.x = static_cast<std::uint16_t>(width > 128 ? 128 + rng() % (width - 128) : rng() % width);
+        e.y = static_cast<std::uint16_t>(rng() % height);
+        e.ts = ebslam_msgs::toRosTime(t_us += 20);
+        e.polarity = (i & 1) != 0;
+        msg.events.push_back(e);
+      }
+      msg.header.stamp = msg.events.back().ts;
+      return msg;
+    };
+    const ebslam_msgs::EventArray small = message(128, 128);
+    events_pub.publish(small);
+    for (int k = 0; k < 3; ++k) {
+      const ebslam_msgs::EventArray davis = message(346, 260);
+      events_pub.publish(davis);
+      EXPECT_TRUE(ebslam_ros_test::spinUntil(
+          [&] { return !poses.empty() && poses.back().header.stamp == davis.header.stamp; }, 10.0))
+          << "no pose for the 346x260 message " << k;
+    }
+    ASSERT_FALSE(poses.empty());
+    EXPECT_EQ(poses.back().header.frame_id, ns.substr(1) + "_map");
+    for (const auto& p : poses) EXPECT_NE(p.header.stamp, small.header.stamp);
+    nodelet::NodeletUnload unload;
+    unload.request.name = name;
+    EXPECT_TRUE(ros::service::call("/manager/unload_nodelet", unload));
+  }
+  g_next_t = t_us + 1000;
+}
+
 TEST(BadMap, NodeRefusesToStartAndLivesOn) {
   bool bad_map = false;
   ros::param::get("~bad_map", bad_map);

@@ -17,6 +17,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -91,11 +92,35 @@ void printResult(const ebslam_ros::BagCalibration& calibration) {
   std::printf("depth_from_edvs t = (%.5f, %.5f, %.5f) m\n", t.x(), t.y(), t.z());
   std::printf("eDVS f = %.3f px, c = (%.3f, %.3f) px, kappa1 = %.3e, kappa2 = %.3e\n", e.focal_px,
               e.principal_point.x(), e.principal_point.y(), e.kappa1, e.kappa2);
+  if (r.uncertainty) {
+    const ebslam::CalibrationUncertainty& u = *r.uncertainty;
+    std::printf(
+        "standard deviations (solver covariance): rotation %.3f deg (about x, y, z: %.3f, %.3f, "
+        "%.3f), translation (%.2f, %.2f, %.2f) mm, f %.2f px, c (%.2f, %.2f) px; rotation / "
+        "centre correlation %.2f\n",
+        u.rotation_std_deg, u.rotation_axes_std_deg.x(), u.rotation_axes_std_deg.y(),
+        u.rotation_axes_std_deg.z(), u.translation_std_mm.x(), u.translation_std_mm.y(),
+        u.translation_std_mm.z(), u.focal_std_px, u.principal_point_std_px.x(),
+        u.principal_point_std_px.y(), u.rotation_principal_point_correlation);
+  } else {
+    std::printf("standard deviations: none (the covariance is singular)\n");
+  }
+  const ebslam::LedPoseCoverage& k = calibration.coverage;
+  std::printf(
+      "LED in the eDVS image's corners in %zu of %zu poses (top-left %zu, top-right %zu, "
+      "bottom-left %zu, bottom-right %zu); depth %.2f-%.2f m\n",
+      k.corners[0] + k.corners[1] + k.corners[2] + k.corners[3], k.poses, k.corners[0],
+      k.corners[1], k.corners[2], k.corners[3], k.min_depth_m, k.max_depth_m);
+  if (!calibration.pose_advice.empty()) {
+    std::printf("WARNING: %s\n", calibration.pose_advice.c_str());
+  }
 }
 
 ebslam::LedCalibrationRunConfig runConfig(std::uint64_t seed, double outlier_fraction, int poses,
-                                          double rest_s, double move_s, double led_frequency) {
+                                          double rest_s, double move_s, double led_frequency,
+                                          double corner_fraction) {
   ebslam::LedCalibrationRunConfig config;
+  config.corner_pose_fraction = corner_fraction;
   config.seed = seed;
   config.simulator.seed = seed;
   config.simulator.events.seed = seed;
@@ -115,8 +140,9 @@ int main(int argc, char** argv) {
   ebslam_ros::BagCalibrationOptions options;
   double outlier_fraction = 0.0;
   std::uint64_t seed = 1;
-  int poses = 150, table_seeds = 0, first_seed = 1;
-  double rest_s = 0.3, move_s = 0.05;
+  int poses = 250, table_seeds = 0, first_seed = 1;
+  double rest_s = 0.25, move_s = 0.05;
+  double corner_fraction = ebslam::LedCalibrationRunConfig{}.corner_pose_fraction;
   auto* bag_option =
       app.add_option("--bag", bag, "calibration bag to read")->check(CLI::ExistingFile);
   auto* simulate_option =
@@ -144,6 +170,11 @@ int main(int argc, char** argv) {
   app.add_option("--min-poses", options.solve.min_correspondences, "fewer usable poses: fail")
       ->capture_default_str();
   app.add_option("--seed", seed, "simulation seed (--simulate)")->capture_default_str();
+  std::string event_camera = "edvs128";
+  app.add_option("--event-camera", event_camera,
+                 "simulation: event sensor (edvs128, davis240, davis346, vga, hd720: the eDVS "
+                 "lens scaled to that size)")
+      ->capture_default_str();
   app.add_option("--outlier-fraction", outlier_fraction,
                  "simulation: fraction of outlier events in the stream")
       ->capture_default_str()
@@ -151,6 +182,13 @@ int main(int argc, char** argv) {
   app.add_option("--poses", poses, "simulation: plate poses")->capture_default_str();
   app.add_option("--rest", rest_s, "simulation: rest per pose [s]")->capture_default_str();
   app.add_option("--move", move_s, "simulation: move between poses [s]")->capture_default_str();
+  app.add_option("--corner-fraction", corner_fraction,
+                 "simulation: share of the poses with the LED in an eDVS image corner")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--max-rotation-std", options.max_rotation_std_deg,
+                 "warn with pose advice above this rotation standard deviation [deg]")
+      ->capture_default_str();
   app.add_option("--truth-output", truth_output, "simulation: write the true sensors.yaml here");
   app.add_option("--compression", compression, "simulation: bag compression")
       ->capture_default_str()
@@ -160,8 +198,9 @@ int main(int argc, char** argv) {
     if (table_seeds > 0) {
       std::printf(
           "| outlier events | seed | usable poses | rotation error [deg] | translation error [mm] "
-          "| focal error [px] | centre error [px] | distortion error [px] | reprojection RMSE "
-          "[px] | status |\n|---|---|---|---|---|---|---|---|---|---|\n");
+          "| rotation std [deg] | focal error [px] | centre error [px] | distortion error [px] "
+          "| reprojection RMSE [px] | corner poses | status |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
       const std::string path = (std::filesystem::temp_directory_path() /
                                 ("dedvs_calibration_" + std::to_string(::getpid()) + ".bag"))
                                    .string();
@@ -169,30 +208,40 @@ int main(int argc, char** argv) {
       for (int s = first_seed; s < first_seed + table_seeds; ++s) {
         ebslam_ros::SimulatedCalibrationBagOptions sim;
         sim.run = runConfig(static_cast<std::uint64_t>(s), outlier_fraction, poses, rest_s, move_s,
-                            options.led_frequency_hz);
+                            options.led_frequency_hz, corner_fraction);
+        sim.run.simulator.edvs = ebslam::CameraModel::preset(event_camera, sim.run.simulator.edvs);
         sim.compression = "none";
         const ebslam_ros::SimulatedCalibrationBag written =
             ebslam_ros::writeSimulatedCalibrationBag(path, sim);
         const ebslam_ros::BagCalibration calibration = ebslam_ros::calibrateFromBag(path, options);
         std::filesystem::remove(path);
         if (!calibration.result) {
-          std::printf("| %.0f %% | %d | %zu | | | | | | | %s |\n", 100.0 * outlier_fraction, s,
+          std::printf("| %.0f %% | %d | %zu | | | | | | | | | %s |\n", 100.0 * outlier_fraction, s,
                       calibration.pairing.correspondences.size(), calibration.problem.c_str());
           ++failures;
           continue;
         }
         const Comparison c = compare(calibration.result->sensors, written.truth);
-        std::printf("| %.0f %% | %d | %zu | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %s |\n",
-                    100.0 * outlier_fraction, s, calibration.pairing.correspondences.size(),
-                    c.rotation_deg, c.translation_mm, c.focal_px, c.centre_px, c.distortion_px,
-                    calibration.result->rmse_px, ebslam::toString(calibration.result->status));
+        const auto& u = calibration.result->uncertainty;
+        char rotation_std[32] = "singular";
+        if (u) std::snprintf(rotation_std, sizeof(rotation_std), "%.4f", u->rotation_std_deg);
+        const std::array<std::size_t, 4>& k = calibration.coverage.corners;
+        std::printf(
+            "| %.0f %% | %d | %zu | %.4f | %.3f | %s | %.3f | %.3f | %.3f | %.3f | %zu | %s%s |\n",
+            100.0 * outlier_fraction, s, calibration.pairing.correspondences.size(), c.rotation_deg,
+            c.translation_mm, rotation_std, c.focal_px, c.centre_px, c.distortion_px,
+            calibration.result->rmse_px, k[0] + k[1] + k[2] + k[3],
+            ebslam::toString(calibration.result->status),
+            calibration.pose_advice.empty() ? "" : ", pose advice");
         std::fflush(stdout);
       }
       return failures == 0 ? 0 : 3;
     }
     if (!simulate.empty()) {
       ebslam_ros::SimulatedCalibrationBagOptions sim;
-      sim.run = runConfig(seed, outlier_fraction, poses, rest_s, move_s, options.led_frequency_hz);
+      sim.run = runConfig(seed, outlier_fraction, poses, rest_s, move_s, options.led_frequency_hz,
+                          corner_fraction);
+      sim.run.simulator.edvs = ebslam::CameraModel::preset(event_camera, sim.run.simulator.edvs);
       sim.compression = compression;
       const ebslam_ros::SimulatedCalibrationBag written =
           ebslam_ros::writeSimulatedCalibrationBag(simulate, sim);

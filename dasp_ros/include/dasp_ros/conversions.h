@@ -29,11 +29,17 @@ dasp::Intrinsics intrinsicsFromFieldOfView(double horizontal_fov_rad, double ver
 sensor_msgs::CameraInfo toCameraInfo(const dasp::Intrinsics& intrinsics, int width, int height,
                                      const std_msgs::Header& header);
 
-/// Colour image (bgr8, rgb8, bgra8, rgba8, mono8) -> CV_8UC3 BGR. The data are copied.
-cv::Mat toColorMat(const sensor_msgs::Image& image);
+/// How an image message's data reach a cv::Mat when no conversion is needed: copied, or shared
+/// (the Mat points into the message, valid only while the message lives and unchanged: for a
+/// callback that keeps nothing, it saves a copy of every frame).
+enum class ImageData : bool { kCopy, kShare };
+
+/// Colour image (bgr8, rgb8, bgra8, rgba8, mono8) -> CV_8UC3 BGR. bgr8 data are copied or shared
+/// (`data`), the others converted.
+cv::Mat toColorMat(const sensor_msgs::Image& image, ImageData data = ImageData::kCopy);
 /// Depth image (16UC1 or mono16: millimetres; 32FC1: metres) -> CV_16UC1 millimetres, 0 = invalid
-/// (NaN, non-positive and beyond 65.535 m become 0).
-cv::Mat toDepthMat(const sensor_msgs::Image& image);
+/// (NaN, non-positive and beyond 65.535 m become 0). Millimetre data are copied or shared.
+cv::Mat toDepthMat(const sensor_msgs::Image& image, ImageData data = ImageData::kCopy);
 /// Registered colour + depth + intrinsics -> RgbdFrame; sizes must agree.
 dasp::RgbdFrame toRgbdFrame(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
                             const sensor_msgs::CameraInfo& info);
@@ -44,15 +50,16 @@ sensor_msgs::Image toColorImageMsg(const cv::Mat& color, const std_msgs::Header&
 sensor_msgs::Image toDepthImageMsg(const cv::Mat& depth_mm, const std_msgs::Header& header);
 /// CV_32SC1 label image (-1 = no superpixel) <-> 32SC1 image message.
 sensor_msgs::Image toLabelImageMsg(const cv::Mat& labels, const std_msgs::Header& header);
-cv::Mat toLabelMat(const sensor_msgs::Image& image);
+cv::Mat toLabelMat(const sensor_msgs::Image& image, ImageData data = ImageData::kCopy);
 
 /// Superpixel list -> SuperpixelArray (without edges; graph edges are added by the caller).
 ebslam_msgs::SuperpixelArray toSuperpixelArrayMsg(const dasp::Superpixels& superpixels,
                                                   const std_msgs::Header& header);
 /// SuperpixelArray + label image message -> Superpixels (ids must index the array, and every
-/// label must be -1 or index it).
+/// label must be -1 or index it). The labels are copied or shared (`data`).
 dasp::Superpixels toSuperpixels(const ebslam_msgs::SuperpixelArray& msg,
-                                const sensor_msgs::Image& labels);
+                                const sensor_msgs::Image& labels,
+                                ImageData data = ImageData::kCopy);
 
 /// Graph edges (a < b, weight) <-> SuperpixelEdge messages. toWeightedGraph throws when an
 /// edge names a node >= node_count or is not ordered a < b.

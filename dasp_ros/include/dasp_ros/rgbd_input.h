@@ -23,6 +23,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "dasp_ros/conversions.h"
 #include "dasp_ros/ros_params.h"
 
 namespace dasp_ros {
@@ -68,15 +69,18 @@ class RgbdInput {
 
   /// Registered RGB-D frame of a matched triple; throws InputError naming the topic at fault
   /// (encoding, empty or short image, sizes that differ, zero or non-finite intrinsics,
-  /// camera_info of another size, no valid depth pixel).
+  /// camera_info of another size, no valid depth pixel). `data`: ImageData::kShare when the
+  /// frame does not outlive the messages (bgr8 and millimetre depth are then not copied).
   dasp::RgbdFrame convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
-                          const sensor_msgs::CameraInfo& info) const {
-    return convert(color, depth, info, topics_);
+                          const sensor_msgs::CameraInfo& info,
+                          ImageData data = ImageData::kCopy) const {
+    return convert(color, depth, info, topics_, data);
   }
   /// As above, naming the topics colour, depth, camera_info (ROS-free: the fuzz targets run it).
   static dasp::RgbdFrame convert(const sensor_msgs::Image& color, const sensor_msgs::Image& depth,
                                  const sensor_msgs::CameraInfo& info,
-                                 const std::array<std::string, 3>& topics);
+                                 const std::array<std::string, 3>& topics,
+                                 ImageData data = ImageData::kCopy);
 
   /// Empty while frames match; otherwise why they do not, e.g. which input has been silent for
   /// how long while the others arrive. Call about once a second.
@@ -88,6 +92,14 @@ class RgbdInput {
   /// Messages received per input since the start.
   std::array<std::size_t, 3> receivedCounts() const;
   std::size_t matchedCount() const;
+
+  /// Also counts the camera_infos as they arrive, through a subscription on `arrivals_nh` (a
+  /// nodelet's multi-threaded handle, so that the count goes on while a frame is processed):
+  /// frames that arrive while the node is busy and are dropped by the subscription queues
+  /// are counted rather than lost silently.
+  void countArrivals(ros::NodeHandle& arrivals_nh);
+  /// camera_infos counted since countArrivals (0 without it).
+  std::size_t arrivedCount() const;
 
  private:
   using Image = sensor_msgs::Image;
@@ -110,7 +122,8 @@ class RgbdInput {
   mutable std::mutex mutex_;
   std::array<std::size_t, 3> received_{};
   std::array<ros::WallTime, 3> last_received_{};
-  std::size_t matched_ = 0;
+  std::size_t matched_ = 0, arrived_ = 0;
+  ros::Subscriber arrivals_sub_;
   ros::WallTime last_matched_;
   ros::WallTime started_;
 };

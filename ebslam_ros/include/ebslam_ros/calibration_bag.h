@@ -64,6 +64,9 @@ struct BagCalibrationOptions {
   ebslam::LedExtractionConfig edvs;      ///< frequency and sensor size are set from the bag
   ebslam::LedPairingConfig pairing;      ///< depth_clock_offset_s is set from above
   ebslam::DedvsCalibrationConfig solve;  ///< initial eDVS size is set from the bag
+  /// Above this worst-direction rotation standard deviation the result carries pose advice
+  /// [deg] (ebslam::advisePoseDiversity).
+  double max_rotation_std_deg = 0.033;
 };
 
 struct BagCalibration {
@@ -79,6 +82,11 @@ struct BagCalibration {
   /// Why the calibration failed or cannot be trusted, in words a user can act on; empty on
   /// success.
   std::string problem;
+  /// The poses' coverage of the eDVS image, and what to do with the LED plate when the
+  /// rotation comes out uncertain (ebslam::advisePoseDiversity; empty when it is determined):
+  /// the calibration is still written, with this warning.
+  ebslam::LedPoseCoverage coverage;
+  std::string pose_advice;
 };
 
 /// Reads the bag and calibrates. Throws std::runtime_error naming the topic for a bag without

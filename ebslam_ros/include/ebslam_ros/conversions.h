@@ -17,6 +17,7 @@
 #include <tf2/LinearMath/Transform.h>
 
 #include <ebslam/events/pose.h>
+#include <ebslam/slam/camera_model.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
@@ -55,6 +56,19 @@ Eigen::Isometry3d readMountFromParams(const std::string& params_yaml);
 /// focal lengths and principal point in pixels.
 sensor_msgs::CameraInfo toCameraInfoMsg(int width, int height, double fx, double fy, double cx,
                                         double cy, const std_msgs::Header& header);
+
+/// An event camera's lens as CameraInfo (R = I, P = [K | 0]: event cameras are not rectified):
+/// kPlumbBob as "plumb_bob" with D = (k1, k2, p1, p2, k3), kEquidistant as "equidistant" with
+/// D = (k1, k2, k3, k4); the thesis' radial lenses as "ebslam_eq63", "ebslam_eq83",
+/// "ebslam_eq81" with D = (kappa1 [1/px], kappa2 [1/px^2]) (only ebslam reads these).
+sensor_msgs::CameraInfo toCameraInfoMsg(const ebslam::CameraModel& camera,
+                                        const std_msgs::Header& header);
+/// The lens of a CameraInfo (the inverse of the above; also "rational_polynomial" whose k4-k6
+/// are 0, "fisheye" for "equidistant", an empty model with an empty D for a pinhole). Throws
+/// std::invalid_argument naming the field for a zero size, a K that is not finite or has skew
+/// or non-positive focal lengths, binning or an ROI, an unknown distortion model or a D of
+/// the wrong length, and a lens that cannot be inverted over the sensor (CameraModel::validate).
+ebslam::CameraModel toCameraModel(const sensor_msgs::CameraInfo& info);
 
 /// An image as a message of `encoding` (little-endian, rows packed: step = cols x element size),
 /// copied row by row so that a non-continuous view (an ROI) is fine. Throws

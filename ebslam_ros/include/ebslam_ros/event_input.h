@@ -27,6 +27,10 @@
 
 #include "ebslam_msgs/event_packet_conversions.h"
 
+namespace diagnostic_updater {
+class DiagnosticStatusWrapper;
+}
+
 namespace ebslam_ros {
 
 struct EventSegment {
@@ -173,5 +177,11 @@ class EventSubscriber {
   Counters counters_;
   ros::WallTime last_error_;
 };
+
+/// The subscription's type and decoder counters on a consumer's diagnostics: "input type",
+/// "event packets", "events decoded", "undecodable packets", "undecodable bytes", "decoded
+/// events outside the sensor", "decoded events outside ros::Time" (0 for EventArray input).
+void addDecoderDiagnostics(const EventSubscriber& subscriber,
+                           diagnostic_updater::DiagnosticStatusWrapper& status);
 
 }  // namespace ebslam_ros

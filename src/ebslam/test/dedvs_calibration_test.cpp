@@ -81,6 +81,95 @@ std::vector<LedCorrespondence> syntheticCorrespondences(const DedvsSensors& sens
   return result;
 }
 
+// Correspondences with the LED where `where` puts it in the eDVS image (by rejection) and
+// Gaussian noise of sigma_px on the eDVS pixel.
+template <class Where>
+std::vector<LedCorrespondence> noisyCorrespondences(const DedvsSensors& sensors, int count,
+                                                    double sigma_px, std::uint64_t seed,
+                                                    Where where) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, sigma_px);
+  std::vector<LedCorrespondence> result;
+  while (static_cast<int>(result.size()) < count) {
+    LedCorrespondence c;
+    c.depth_pixel = Eigen::Vector2d(unit(rng) * 319.0, unit(rng) * 239.0);
+    c.depth_m = 0.55 + 1.25 * unit(rng);
+    const std::optional<Eigen::Vector2d> v = depthToEdvsPixel(sensors, c.depth_pixel, c.depth_m);
+    if (!v || !sensors.edvs.isInside(*v) || !where(*v)) continue;
+    c.edvs_pixel = *v + Eigen::Vector2d(noise(rng), noise(rng));
+    result.push_back(c);
+  }
+  return result;
+}
+
+// The reported rotation standard deviation is the rotation's scatter over noise draws, and poses
+// in the corners separate the rotation from the principal point better than central ones.
+TEST(DedvsCalibration, UncertaintyMatchesTheScatterAndFollowsThePoses) {
+  const DedvsSensors truth = sensorsOf(DedvsSimulatorConfig{});
+  auto anywhere = [](const Eigen::Vector2d&) { return true; };
+  const Eigen::Matrix3d true_rotation = truth.depth_from_edvs.linear();
+  double sum_squares = 0.0, sum_reported = 0.0;
+  constexpr int kDraws = 24;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    const DedvsCalibrationResult result =
+        calibrateDedvs(noisyCorrespondences(truth, 120, 0.1, 100 + draw, anywhere), truth);
+    ASSERT_EQ(result.status, CalibrationStatus::kOk);
+    ASSERT_TRUE(result.uncertainty.has_value());
+    // Rotation error about the eDVS x axis (one of the two weak directions) [deg].
+    const Eigen::AngleAxisd difference(true_rotation.transpose() *
+                                       result.sensors.depth_from_edvs.linear());
+    const double error_x = (difference.angle() * difference.axis()).x() * 180.0 / M_PI;
+    sum_squares += error_x * error_x;
+    sum_reported += result.uncertainty->rotation_axes_std_deg.x();
+    EXPECT_GE(result.uncertainty->rotation_std_deg,
+              result.uncertainty->rotation_axes_std_deg.maxCoeff() - 1e-12);
+  }
+  const double scatter = std::sqrt(sum_squares / kDraws);
+  const double reported = sum_reported / kDraws;
+  EXPECT_GT(reported, 0.5 * scatter);
+  EXPECT_LT(reported, 2.0 * scatter);
+
+  // The same number of poses in the central half of the image only: a weaker rotation, and
+  // the advice names the corners; with half of them in the corners no advice is needed.
+  auto central = [](const Eigen::Vector2d& v) {
+    return std::abs(v.x() - 63.5) < 32.0 && std::abs(v.y() - 63.5) < 32.0;
+  };
+  auto corner = [](const Eigen::Vector2d& v) {
+    return std::abs(v.x() - 63.5) > 44.0 && std::abs(v.y() - 63.5) > 44.0;
+  };
+  const DedvsCalibrationResult weak =
+      calibrateDedvs(noisyCorrespondences(truth, 250, 0.1, 7, central), truth);
+  std::vector<LedCorrespondence> spread = noisyCorrespondences(truth, 125, 0.1, 8, anywhere);
+  const std::vector<LedCorrespondence> corners = noisyCorrespondences(truth, 125, 0.1, 9, corner);
+  spread.insert(spread.end(), corners.begin(), corners.end());
+  const DedvsCalibrationResult strong = calibrateDedvs(spread, truth);
+  ASSERT_TRUE(weak.uncertainty && strong.uncertainty);
+  EXPECT_GT(weak.uncertainty->rotation_std_deg, 2.0 * strong.uncertainty->rotation_std_deg);
+  EXPECT_GT(weak.uncertainty->rotation_principal_point_correlation,
+            strong.uncertainty->rotation_principal_point_correlation);
+
+  const LedPoseCoverage weak_coverage = ledPoseCoverage(
+      noisyCorrespondences(truth, 250, 0.1, 7, central), truth.edvs.width, truth.edvs.height);
+  EXPECT_EQ(weak_coverage.poses, 250u);
+  EXPECT_EQ(weak_coverage.corners[0] + weak_coverage.corners[1] + weak_coverage.corners[2] +
+                weak_coverage.corners[3],
+            0u);
+  const std::string advice = advisePoseDiversity(weak, weak_coverage, 0.05);
+  EXPECT_NE(advice.find("corners"), std::string::npos) << advice;
+  const LedPoseCoverage strong_coverage =
+      ledPoseCoverage(spread, truth.edvs.width, truth.edvs.height);
+  EXPECT_GE(strong_coverage.corners[0] + strong_coverage.corners[1] + strong_coverage.corners[2] +
+                strong_coverage.corners[3],
+            125u);
+  for (std::size_t count : strong_coverage.corners) EXPECT_GT(count, 15u);
+  EXPECT_LT(strong.uncertainty->rotation_std_deg, 0.05);
+  EXPECT_GT(weak.uncertainty->rotation_std_deg, 0.05);
+  EXPECT_EQ(advisePoseDiversity(strong, strong_coverage, 0.05), "");
+  EXPECT_THROW(ledPoseCoverage(spread, 128, 128, 0.0), std::invalid_argument);
+  EXPECT_THROW(advisePoseDiversity(strong, strong_coverage, 0.0), std::invalid_argument);
+}
+
 TEST(DedvsCalibration, ExactCorrespondencesGiveTheTruth) {
   const DedvsSensors truth = sensorsOf(DedvsSimulatorConfig{});
   const DedvsCalibrationResult result =

@@ -205,6 +205,8 @@ TEST(Ebslam3dConfig, ValidatesAndPresets) {
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.sigma_position_per_sqrt_s = -0.1; })),
                std::invalid_argument);
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.health.lost_fit = 0.9; })), std::invalid_argument);
+  EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.health.max_event_gap_s = -1.0; })),
+               std::invalid_argument);
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.relocalisation.particles = 0; })),
                std::invalid_argument);
   EXPECT_THROW(EventSlam3d(bad([](auto& c) { c.relocalisation.growth = 0.5; })),
@@ -695,6 +697,41 @@ TEST(EventSlam3d, RelocalisesAfterAForcedLoss) {
   EXPECT_TRUE(with.relocalised);
   EXPECT_GT(with.last_relocalisation_s, 0.0);
   EXPECT_LT(with.last_relocalisation_s, 3.0);
+}
+
+// A gap in the events longer than max_event_gap_s turns the state lost with the first batch
+// after it, whatever the fit says (here the sensor did not move while covered, so the events
+// fit at once): the search starts, finds the unchanged pose and the state is tracking again.
+// A shorter gap, or the rule off, changes nothing.
+TEST(EventSlam3d, AGapInTheEventsStartsASearch) {
+  const auto run = [](double max_gap_s, std::int64_t gap_us) {
+    Ebslam3dConfig c;
+    c.health.max_event_gap_s = max_gap_s;
+    EventSlam3d slam(c);
+    PointScene scene(5);
+    const auto still = [](std::int64_t) { return Pose3{}; };
+    slam.process(scene.events(0, 1000000, 20000.0, still));
+    const std::int64_t t1 = 1000000 + gap_us;
+    slam.process(scene.events(t1, t1 + 20000, 20000.0, still));
+    const TrackingHealth after_gap = slam.health();
+    slam.process(scene.events(t1 + 20000, t1 + 1500000, 20000.0, still));
+    EXPECT_LT(slam.estimate().position.norm(), 0.03);
+    return std::make_pair(after_gap, slam.health());
+  };
+  const auto [gap, later] = run(0.5, 800000);
+  EXPECT_EQ(gap.event_gaps, 1u);
+  EXPECT_EQ(gap.lost_count, 1u);
+  EXPECT_NE(gap.state, TrackingState::kTracking);
+  EXPECT_EQ(later.state, TrackingState::kTracking);
+  EXPECT_EQ(later.relocalisations, 1u);
+  EXPECT_LT(later.last_relocalisation_s, 1.5);
+  const auto [short_gap, short_later] = run(0.5, 300000);
+  EXPECT_EQ(short_gap.event_gaps, 0u);
+  EXPECT_EQ(short_later.lost_count, 0u);
+  const auto [off, off_later] = run(0.0, 800000);
+  EXPECT_EQ(off.event_gaps, 0u);
+  EXPECT_EQ(off_later.lost_count, 0u);
+  EXPECT_EQ(off_later.state, TrackingState::kTracking);
 }
 
 // Events without a depth: after a map is built from depth events, the sensor moves 8 cm and

@@ -32,9 +32,13 @@ struct Simulated {
 
 /// Simulates the floor-robot camera path `floor` (camera poses, z up; e.g.
 /// makeFloorRobotTrajectory of a motion-capture run) for its first duration_s [s] (0 = all), or
-/// reads the cached simulation from `dir`.
+/// reads the cached simulation from `dir`. `camera`: the upward camera (any size and lens).
+/// contrast_threshold > 0 replaces the simulator's ON and OFF contrast thresholds (a lower one gives
+/// a denser stream).
 inline Simulated simulateFloorRun(const Trajectory& floor, const std::filesystem::path& dir,
-                                  double duration_s, std::uint64_t seed, double noise_rate_hz) {
+                                  double duration_s, std::uint64_t seed, double noise_rate_hz,
+                                  const CameraModel& camera = CameraModel{},
+                                  double contrast_threshold = 0.0) {
   namespace fs = std::filesystem;
   Simulated s;
   const fs::path events_path = dir / "events.ebe";
@@ -43,8 +47,13 @@ inline Simulated simulateFloorRun(const Trajectory& floor, const std::filesystem
   const fs::path edges_path = dir / "ceiling_edges.png";
   const fs::path meta_path = dir / "ceiling_map.txt";
   SimulatorConfig sim;
+  sim.camera = camera;
   sim.events.seed = seed;
   sim.events.noise_rate_hz_per_pixel = noise_rate_hz;
+  if (contrast_threshold > 0.0) {
+    sim.events.contrast_threshold_on = contrast_threshold;
+    sim.events.contrast_threshold_off = contrast_threshold;
+  }
   if (fs::exists(events_path) && fs::exists(gt_path) && fs::exists(edges_path) &&
       fs::exists(meta_path)) {
     s.events = readEventFile(events_path.string()).events;
@@ -101,7 +110,9 @@ inline Simulated simulateFloorRun(const Trajectory& floor, const std::filesystem
   s.map.intensity = texture;
   s.map.metres_per_pixel = edge_pixel_m;
   s.map.origin_m = region.min + Eigen::Vector2d::Constant(0.5 * edge_pixel_m);
-  writeEventFile(events_path.string(), s.events, SensorSize{128, 128});
+  writeEventFile(events_path.string(), s.events,
+                 SensorSize{static_cast<std::uint32_t>(camera.width),
+                            static_cast<std::uint32_t>(camera.height)});
   {
     std::ofstream out(labels_path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(s.noise_labels.data()),

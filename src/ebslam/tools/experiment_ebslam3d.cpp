@@ -72,13 +72,15 @@ using PointSink = std::function<void(const ebslam::PointEvent&)>;
 // [0, duration] and streams the fused events to `sink`. Returns the eDVS ground truth.
 ebslam::Trajectory dedvsEvents(const ebslam::Trajectory& truth, double duration_s,
                                std::uint64_t seed, bool with_table, const PointSink& sink,
-                               std::size_t* simulated, std::size_t* without_depth) {
+                               std::size_t* simulated, std::size_t* without_depth,
+                               const ebslam::CameraModel& event_camera) {
   using namespace ebslam;
   RoomSceneConfig room;
   room.seed = seed;
   room.with_table = with_table;
   const Scene scene = makeRoomScene(truth, room);
   DedvsSimulatorConfig config;
+  config.edvs = event_camera;
   config.seed = seed;
   config.events.seed = seed;
   DepthEventFusion fusion(sensorsOf(config));
@@ -424,7 +426,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       "\"lost_share\": %.4f, \"cover_at_s\": %g, \"cover_for_s\": %g, \"covered_events\": %zu, "
       "\"cover_noticed\": %s, \"cover_recovery_s\": %.3f, \"memory_first_minute_mib\": %.3f, "
       "\"memory_end_mib\": %.3f, \"memory_growth_mib_per_min\": %.4f, \"keyframes\": %zu, "
-      "\"motion_window_s\": %g, \"velocity_prediction\": %g, \"ray_min_depthless_share\": %g, ",
+      "\"motion_window_s\": %g, \"ray_min_depthless_share\": %g, \"max_event_gap_s\": %g, "
+      "\"event_gaps\": %llu, ",
       r.groundtruth.c_str(), r.source.c_str(), r.preset.c_str(),
       static_cast<unsigned long long>(config.seed), static_cast<unsigned long long>(r.scene_seed),
       config.num_particles, config.resample_every, config.batch_size, config.event_share,
@@ -446,8 +449,8 @@ void printJson(const RunSummary& r, const ebslam::Ebslam3dConfig& config, const 
       states.lost_share, r.cover_at_s, r.cover_for_s, r.covered,
       states.cover_noticed ? "true" : "false", states.cover_recovery_s,
       states.memory_first_minute_mib, states.memory_end_mib, states.memory_growth_mib_per_min,
-      slam.keyframes().size(), config.motion_window_s, config.velocity_prediction,
-      config.rays.min_depthless_share);
+      slam.keyframes().size(), config.motion_window_s, config.rays.min_depthless_share,
+      config.health.max_event_gap_s, static_cast<unsigned long long>(slam.health().event_gaps));
   const ebslam::GyroPrior& gyro = slam.gyro();
   std::printf(
       "\"imu\": %s, \"imu_rate_hz\": %g, \"gyro_noise_density\": %g, "
@@ -496,6 +499,11 @@ int main(int argc, char** argv) {
                  "default, fast (this project's presets) or thesis (the thesis' 8.4 default set)")
       ->check(CLI::IsMember({"default", "fast", "thesis"}))
       ->capture_default_str();
+  std::string camera_name = "edvs128";
+  app.add_option("--camera", camera_name,
+                 "event camera of the D-eDVS rig: edvs128, davis240, davis346, vga, hd720 (the "
+                 "rig's eDVS lens scaled to the sensor: same horizontal field of view)")
+      ->capture_default_str();
   app.add_option("--duration", duration_s, "use only the first this many seconds (0 = all)");
   app.add_option("--seed", config.seed, "filter seed (the scene and events use --scene-seed)");
   app.add_option("--scene-seed", scene_seed, "seed of the room, its events and the depth noise");
@@ -523,8 +531,6 @@ int main(int argc, char** argv) {
                                   "linear speed of diffusion scale 1 [m/s]");
   auto* window_opt = app.add_option("--motion-window", config.motion_window_s,
                                     "window of the speed measure [s of event time]");
-  auto* velocity_opt = app.add_option("--velocity-prediction", config.velocity_prediction,
-                                      "share of the estimate's velocity predicted per batch");
   auto* ray_share_opt =
       app.add_option("--ray-min-depthless-share", config.rays.min_depthless_share,
                      "score rays only while this share of the events has no depth (0 = always)");
@@ -534,6 +540,8 @@ int main(int argc, char** argv) {
                                          "tracking state: recovering at or above this fit");
   auto* fit_time_opt = app.add_option("--fit-time", config.health.fast_time_s,
                                       "tracking state: smoothing of the fit [s of event time]");
+  auto* gap_opt = app.add_option("--max-event-gap", config.health.max_event_gap_s,
+                                 "tracking state: lost after a gap in the events [s] (0 = off)");
   auto* reloc_n_opt = app.add_option("--relocalisation-particles", config.relocalisation.particles,
                                      "particles while searching when lost");
   app.add_option("--diagnostics", diagnostics_out,
@@ -614,13 +622,13 @@ int main(int argc, char** argv) {
     if (wref_opt->count()) config.reference_angular_speed = given.reference_angular_speed;
     if (vref_opt->count()) config.reference_linear_speed = given.reference_linear_speed;
     if (window_opt->count()) config.motion_window_s = given.motion_window_s;
-    if (velocity_opt->count()) config.velocity_prediction = given.velocity_prediction;
     if (ray_share_opt->count()) {
       config.rays.min_depthless_share = given.rays.min_depthless_share;
     }
     if (lost_fit_opt->count()) config.health.lost_fit = given.health.lost_fit;
     if (recover_fit_opt->count()) config.health.recover_fit = given.health.recover_fit;
     if (fit_time_opt->count()) config.health.fast_time_s = given.health.fast_time_s;
+    if (gap_opt->count()) config.health.max_event_gap_s = given.health.max_event_gap_s;
     if (reloc_n_opt->count()) config.relocalisation.particles = given.relocalisation.particles;
     if (max_map_mb >= 0.0) config.max_map_bytes = static_cast<std::size_t>(max_map_mb * 1048576.0);
     if (splat_all) config.splat = MapSplat3d::kAllParticles;
@@ -629,6 +637,8 @@ int main(int argc, char** argv) {
     if (no_relocalisation) config.relocalisation.enabled = false;
     if (cover_at_s >= 0.0 && !(cover_for_s > 0.0))
       throw std::runtime_error("--cover-for must be > 0");
+    const CameraModel event_camera =
+        CameraModel::preset(camera_name, DedvsSimulatorConfig::defaultEdvsCamera());
     Trajectory truth;
     if (!motion.empty()) {
       // The path's shape is fixed (seed 1); --scene-seed varies the room, events and noise.
@@ -677,7 +687,7 @@ int main(int argc, char** argv) {
       for (StampedPose& pose : truth) pose.t_s -= t0;
       const double t1 =
           duration_s > 0.0 ? std::min(truth.back().t_s, duration_s) : truth.back().t_s;
-      config.focal_px = DedvsSimulatorConfig{}.edvs.focal_px;
+      config.focal_px = event_camera.focal_px;
       DedvsSimulatorConfig rig;
       rig.imu = imu_sim;
       sensor_from_imu = edvsFromImu(rig);
@@ -690,12 +700,12 @@ int main(int argc, char** argv) {
       } else if (!events_cache.empty()) {
         const PointSink store = [&](const PointEvent& e) { cached.push_back(e); };
         sensor_truth = dedvsEvents(truth, t1, scene_seed, with_table, store, &summary.simulated,
-                                   &summary.without_depth);
+                                   &summary.without_depth, event_camera);
         writeCache(events_cache, cached, sensor_truth, summary.simulated, summary.without_depth);
         for (const PointEvent& e : cached) sink(e);
       } else {
         sensor_truth = dedvsEvents(truth, t1, scene_seed, with_table, sink, &summary.simulated,
-                                   &summary.without_depth);
+                                   &summary.without_depth, event_camera);
       }
     } else {
       config.focal_px = sensor.focal_px;

@@ -53,9 +53,9 @@ namespace {
 using tools::Simulated;
 
 Simulated simulateRun(const fs::path& mocap, const fs::path& dir, double duration_s,
-                      std::uint64_t seed, double noise_rate_hz) {
+                      std::uint64_t seed, double noise_rate_hz, const CameraModel& camera) {
   return tools::simulateFloorRun(makeFloorRobotTrajectory(readTumTrajectory(mocap.string())), dir,
-                                 duration_s, seed, noise_rate_hz);
+                                 duration_s, seed, noise_rate_hz, camera);
 }
 
 // Position / rotation RMSE of an EB-PF run in the map (= world) frame, no alignment; the
@@ -153,6 +153,10 @@ struct Options {
   bool noise_only = false;
   std::string noise_variants_text = "off,filter,robust,filter+robust";
   std::string trajectory_filter;
+  std::string camera = "edvs128";
+  bool scale_g0 = false;
+  CameraModel camera_model;  // from `camera`
+  double g0_factor = 1.0;    // applied to every G0 when scale_g0
 };
 
 void addOptions(CLI::App& app, Options& o) {
@@ -197,9 +201,24 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--only", o.trajectory_filter, "only trajectories whose name contains this");
   app.add_flag("--noise-only", o.noise_only,
                "only the noise runs (the default-noise runs and G0 sweeps are left out)");
+  app.add_option("--camera", o.camera,
+                 "upward event camera: edvs128, davis240, davis346, vga, hd720 (the thesis' lens "
+                 "scaled to the sensor: same horizontal field of view)")
+      ->capture_default_str();
+  app.add_option("--scale-g0", o.scale_g0,
+                 "scale every G0 (events per pixel of motion, eq. 6.8) by the focal length "
+                 "relative to the thesis' eDVS (an edge spans that many more pixels); off by "
+                 "default: on a DAVIS346 it shrinks EB-PF's diffusion until the filter lags "
+                 "behind a turn (40-45 cm on pioneer_360, 0.37 cm without)")
+      ->capture_default_str();
   app.add_option("--denoise-windows", o.denoise_windows_text,
                  "support windows [us] scored against the noise labels")
       ->capture_default_str();
+}
+
+SensorSize sensorSize(const Options& o) {
+  return {static_cast<std::uint32_t>(o.camera_model.width),
+          static_cast<std::uint32_t>(o.camera_model.height)};
 }
 
 // The freiburg2_pioneer_* trajectories of the shared data whose name contains `filter`, sorted.
@@ -255,7 +274,7 @@ class TrajectoryRuns {
             const EventVector& events, std::ostream& out, const std::string& suffix) const {
     EbpfConfig config;
     config.filter.resample_every = k;
-    config.filter.g0 = g0;
+    config.filter.g0 = g0 * options_.g0_factor;
     config.filter.batch_size = options_.batch;
     config.filter.latency_compensation_s = options_.latency_s;
     config.filter.seed = static_cast<std::uint64_t>(seed);
@@ -303,7 +322,7 @@ class TrajectoryRuns {
             bool noise_aware = false) const {
     Ebslam2dConfig config;
     config.noise_aware_diffusion = noise_aware;
-    config.filter.g0 = g0;
+    config.filter.g0 = g0 * options_.g0_factor;
     config.filter.batch_size = options_.batch;
     config.filter.num_particles = n;
     config.filter.seed = static_cast<std::uint64_t>(seed);
@@ -381,8 +400,7 @@ void scoreDenoiser(const Options& o, const std::string& name, double rate, const
       c.min_support = support;
       c.polarity_match = polarity;
       const auto t_start = std::chrono::steady_clock::now();
-      const DenoisingScore d =
-          scoreDenoising(c, SensorSize{128, 128}, noisy.events, noisy.noise_labels);
+      const DenoisingScore d = scoreDenoising(c, sensorSize(o), noisy.events, noisy.noise_labels);
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
       denoise_csv << name << ',' << rate << ',' << window << ',' << support << ',' << polarity
@@ -406,14 +424,14 @@ void noiseRuns(const Options& o, const fs::path& mocap, const fs::path& dir,
                std::ostream& noise_csv, std::ostream& denoise_csv) {
   char rate_text[32];
   std::snprintf(rate_text, sizeof rate_text, "%g", rate);
-  const Simulated noisy =
-      simulateRun(mocap, dir / ("noise" + std::string(rate_text)), o.duration_s, 1, rate);
+  const Simulated noisy = simulateRun(mocap, dir / ("noise" + std::string(rate_text)), o.duration_s,
+                                      1, rate, o.camera_model);
   if (noisy.noise_labels.size() != noisy.events.size()) {
     throw std::runtime_error("no noise labels for " + (dir / rate_text).string() +
                              "; delete the folder to simulate it again");
   }
   scoreDenoiser(o, name, rate, noisy, denoise_csv);
-  BackgroundActivityFilter filter(o.denoise, SensorSize{128, 128});
+  BackgroundActivityFilter filter(o.denoise, sensorSize(o));
   EventVector filtered;
   filter.filter(noisy.events, filtered);
   std::printf("  noise %g Hz: %zu events, %zu after the filter\n", rate, noisy.events.size(),
@@ -468,15 +486,24 @@ int main(int argc, char** argv) {
                      "signal_kept,noise,"
                      "noise_removed,events_per_s\n";
     }
-    const CeilingCamera camera(CameraModel{}, kThesisCeilingHeightM);
+    o.camera_model = CameraModel::preset(o.camera);
+    const CeilingCamera camera(o.camera_model, kThesisCeilingHeightM);
+    if (o.scale_g0) {
+      // G0 counts events per pixel of motion (eq. 6.8): an edge of the same length on the
+      // ceiling spans f / f_thesis times the pixels.
+      o.g0_factor = o.camera_model.focal_px / CameraModel{}.focal_px;
+    }
+    std::printf("camera %s: %d x %d, f = %.1f px, W_trig = %.2f cm, G0 factor %.3f\n",
+                o.camera.c_str(), o.camera_model.width, o.camera_model.height,
+                o.camera_model.focal_px, 100.0 * camera.wTrig(), o.g0_factor);
     for (const fs::path& mocap : mocap_files) {
       std::string name = mocap.filename().string();
       name = name.substr(name.find("freiburg2_"));
       if (const auto end = name.find("-groundtruth"); end != std::string::npos) name.resize(end);
       const fs::path dir = fs::path(o.out_dir) / name;
       const auto sim_start = std::chrono::steady_clock::now();
-      const Simulated run =
-          simulateRun(mocap, dir, o.duration_s, 1, EventModelConfig{}.noise_rate_hz_per_pixel);
+      const Simulated run = simulateRun(mocap, dir, o.duration_s, 1,
+                                        EventModelConfig{}.noise_rate_hz_per_pixel, o.camera_model);
       const double sim_seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
       const TrajectoryRuns runs(o, name, dir, run, camera);

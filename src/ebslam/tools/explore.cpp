@@ -90,15 +90,17 @@ void reportRun(std::ofstream& summary, const std::string& layout, const std::str
           << errors.max_error << ',' << diverged << ',' << r.bump_events << ','
           << (duration > 0.0 ? r.bump_events * 60.0 / duration : 0.0) << ',' << r.events << ','
           << r.wall_time_s << ',' << per_call_ms << ',' << r.collapses << ',' << r.relocalisations
-          << '\n';
+          << ',' << r.done_time_s << ',' << r.done_share << ',' << r.covered_at_done << ','
+          << r.slow_seconds << '\n';
   summary.flush();
   std::printf(
       "%-10s %-6s seed %d: 90%% at %6.1f s, covered %.3f of %.1f m^2, RMSE %.2f cm "
-      "(raw %.2f, max %.2f), %zu bumps, %zu collapses, %.0f s wall, planner %.3f ms/call\n",
+      "(raw %.2f, max %.2f), %zu bumps, %zu collapses, %.0f s wall, planner %.3f ms/call, "
+      "done at %.0f s (share %.3f, true %.3f)\n",
       layout.c_str(), method.c_str(), seed, r.time_to_90_s,
       r.samples.empty() ? 0.0 : r.samples.back().covered, r.reachable_area_m2,
       errors.rmse_aligned * 100, errors.rmse_raw * 100, errors.max_error * 100, r.bump_events,
-      r.collapses, r.wall_time_s, per_call_ms);
+      r.collapses, r.wall_time_s, per_call_ms, r.done_time_s, r.done_share, r.covered_at_done);
   std::fflush(stdout);
 }
 
@@ -114,6 +116,7 @@ int main(int argc, char** argv) {
   double baseline_duration_s = 0.0;
   double divergence_m = 0.3;
   ExplorationRunConfig config;
+  std::string planner = "gain";
   app.add_option("floor_plans", plans, "floor-plan files")->required()->check(CLI::ExistingFile);
   app.add_option("--seeds", seeds, "seeds (simulator, ceiling, filter, baseline)");
   app.add_option("--output", output, "output directory")->capture_default_str();
@@ -136,6 +139,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-step-px", config.simulator.events.max_step_motion_px,
                  "event simulator's largest image motion per render step [px]")
       ->capture_default_str();
+  app.add_option("--render-per-substep", config.simulator.render_per_substep,
+                 "render the eDVS once per 5 ms kinematics sub-step, as runs made before "
+                 "(1/0); default: at --render-rate along the step's path")
+      ->capture_default_str();
   app.add_option("--lookahead", config.exploration.lookahead_m, "pure-pursuit look-ahead [m]")
       ->capture_default_str();
   app.add_option("--near-blocked-cost", config.exploration.near_blocked_cost,
@@ -154,12 +161,29 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--divergence", divergence_m, "position RMSE counted as divergence [m]")
       ->capture_default_str();
+  app.add_option("--planner", planner, "exploring planner: coverage (lanes) or gain (thesis 7.4)")
+      ->check(CLI::IsMember({"coverage", "gain"}))
+      ->capture_default_str();
+  app.add_option("--lane-spacing", config.coverage.lane_spacing_m,
+                 "coverage: distance between lanes [m]")
+      ->capture_default_str();
+  app.add_option("--wall-half-length", config.coverage.wall_half_length_m,
+                 "coverage: half length of the wall assumed along a contact's tangent [m]")
+      ->capture_default_str();
+  app.add_option("--wall-depth", config.coverage.wall_depth_m,
+                 "coverage: depth of the wall assumed beyond a contact [m]")
+      ->capture_default_str();
+  app.add_option("--slow-when-lost", config.slow_when_lost,
+                 "coverage: drive slower while the tracking monitor reports EB-SLAM lost (1/0)")
+      ->capture_default_str();
   app.add_flag("--baseline", with_baseline, "also run the random bump-and-turn baseline");
   app.add_option("--baseline-duration", baseline_duration_s,
                  "simulated time of the baseline runs [s] (default: --duration); the baseline "
                  "simulates no events, so it can run long enough to reach 90 %");
   app.add_flag("--baseline-only", baseline_only, "run only the baseline");
   CLI11_PARSE(app, argc, argv);
+  config.coverage_planner = planner == "coverage";
+  config.coverage.max_turn_rate_rps = config.exploration.max_turn_rate_rps;
 
   try {
     fs::create_directories(output);
@@ -169,7 +193,8 @@ int main(int argc, char** argv) {
     if (new_summary) {
       summary << "layout,method,seed,duration_s,time_to_90_s,final_covered,reachable_area_m2,"
                  "rmse_aligned_m,rmse_raw_m,max_error_m,diverged,bumps,bumps_per_min,events,"
-                 "wall_s,planner_ms_per_call,collapses,relocalisations\n";
+                 "wall_s,planner_ms_per_call,collapses,relocalisations,done_s,done_share,"
+                 "covered_at_done,slow_s\n";
     }
     std::vector<bool> methods;  // false: the gain planner, true: the random baseline
     if (!baseline_only) methods.push_back(false);
@@ -184,7 +209,7 @@ int main(int argc, char** argv) {
           run.seed = static_cast<std::uint64_t>(seed);
           run.random_baseline = baseline;
           if (baseline && baseline_duration_s > 0.0) run.duration_s = baseline_duration_s;
-          const std::string method = baseline ? "random" : "gain";
+          const std::string method = baseline ? "random" : planner;
           const std::string stem =
               (fs::path(output) / (layout + "_" + method + "_s" + std::to_string(seed))).string();
           const ExplorationRunResult r = runExploration(plan, run);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <random>
@@ -413,6 +414,79 @@ void fillResult(const CalibrationParameters& p, const std::vector<ReprojectionRe
   }
 }
 
+// Standard deviations of the parameters at the solution from the covariance of a plain least
+// squares problem over the used correspondences, scaled by their residual variance; nullopt when
+// the covariance is singular (the poses do not determine every parameter).
+std::optional<CalibrationUncertainty> estimateUncertainty(
+    CalibrationParameters p, const std::vector<ReprojectionResidual>& residuals,
+    const std::vector<bool>& used) {
+  constexpr int kParameters = 11;
+  ceres::Problem problem;
+  double sum_squares = 0.0;
+  int count = 0;
+  for (std::size_t i = 0; i < residuals.size(); ++i) {
+    if (!used[i]) continue;
+    const double error = p.error(residuals[i]);
+    if (!std::isfinite(error)) continue;
+    sum_squares += error * error;
+    ++count;
+    auto cost = std::make_unique<ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 3, 3, 5>>(
+        std::make_unique<ReprojectionResidual>(residuals[i]).release());
+    problem.AddResidualBlock(cost.release(), nullptr, p.rotation, p.translation, p.intrinsics);
+  }
+  if (2 * count <= kParameters) return std::nullopt;
+  // The Jacobian Ceres evaluates at the solution; its columns differ by orders of magnitude
+  // (radians, metres, pixels, kappa2 per square pixel), so (J^T J)^-1 is formed on columns scaled
+  // to unit norm and scaled back (Ceres' own covariance would call it rank deficient).
+  ceres::CRSMatrix crs;
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = {p.rotation, p.translation, p.intrinsics};
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &crs)) return std::nullopt;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int row = 0; row < crs.num_rows; ++row) {
+    for (int k = crs.rows[row]; k < crs.rows[row + 1]; ++k) {
+      jacobian(row, crs.cols[k]) = crs.values[k];
+    }
+  }
+  const Eigen::VectorXd norms = jacobian.colwise().norm();
+  if (!(norms.minCoeff() > 0.0) || !norms.allFinite()) return std::nullopt;
+  const Eigen::VectorXd inverse_norms = norms.cwiseInverse();
+  const Eigen::MatrixXd scaled = jacobian * inverse_norms.asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
+  const Eigen::VectorXd singular = svd.singularValues();
+  if (!(singular.minCoeff() > 1e-9 * singular.maxCoeff())) return std::nullopt;
+  const Eigen::MatrixXd v = svd.matrixV();
+  const Eigen::VectorXd inverse_variances = singular.array().square().inverse().matrix();
+  const Eigen::MatrixXd scaled_covariance = v * inverse_variances.asDiagonal() * v.transpose();
+  Eigen::Matrix<double, kParameters, kParameters> c =
+      inverse_norms.asDiagonal() * scaled_covariance * inverse_norms.asDiagonal();
+  // Residuals in pixels, two per correspondence: variance of one residual component.
+  c *= sum_squares / static_cast<double>(2 * count - kParameters);
+  if (!c.allFinite()) return std::nullopt;
+  constexpr double kDeg = 180.0 / kPi;
+  CalibrationUncertainty u;
+  const Eigen::Matrix3d rotation = c.topLeftCorner<3, 3>();
+  for (int k = 0; k < 3; ++k) {
+    u.rotation_axes_std_deg[k] = kDeg * std::sqrt(std::max(0.0, rotation(k, k)));
+    u.translation_std_mm[k] = 1000.0 * std::sqrt(std::max(0.0, c(3 + k, 3 + k)));
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(rotation);
+  u.rotation_std_deg = kDeg * std::sqrt(std::max(0.0, eigen.eigenvalues().maxCoeff()));
+  u.focal_std_px = std::sqrt(std::max(0.0, c(6, 6)));
+  u.principal_point_std_px =
+      Eigen::Vector2d(std::sqrt(std::max(0.0, c(7, 7))), std::sqrt(std::max(0.0, c(8, 8))));
+  for (int r = 0; r < 3; ++r) {
+    for (int q = 7; q < 9; ++q) {
+      const double norm = std::sqrt(c(r, r) * c(q, q));
+      if (norm > 0.0) {
+        u.rotation_principal_point_correlation =
+            std::max(u.rotation_principal_point_correlation, std::abs(c(r, q)) / norm);
+      }
+    }
+  }
+  return u;
+}
+
 }  // namespace
 
 DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& correspondences,
@@ -454,6 +528,8 @@ DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& corr
     if (summary.termination_type == ceres::FAILURE) converged = false;
   }
   fillResult(parameters, residuals, base, config, inlier_threshold, converged, result);
+  // The uncertainty of the final solve's correspondences (the trimmed ones when trimmed).
+  result.uncertainty = estimateUncertainty(parameters, residuals, used);
   return result;
 }
 
@@ -462,6 +538,65 @@ std::optional<Eigen::Vector2d> depthToEdvsPixel(const DedvsSensors& sensors,
                                                 double depth_m) {
   const Eigen::Vector3d point = depthPoint(sensors.depth, depth_pixel, depth_m);
   return sensors.edvs.project(sensors.depth_from_edvs.inverse() * point);
+}
+
+LedPoseCoverage ledPoseCoverage(const std::vector<LedCorrespondence>& correspondences, int width,
+                                int height, double corner_size_fraction) {
+  require(width > 0 && height > 0, "ledPoseCoverage: width and height must be positive");
+  require(corner_size_fraction > 0.0 && corner_size_fraction <= 0.5,
+          "ledPoseCoverage: corner_size_fraction must lie in (0, 0.5]");
+  LedPoseCoverage coverage;
+  coverage.poses = correspondences.size();
+  const double corner_w = corner_size_fraction * width, corner_h = corner_size_fraction * height;
+  for (const LedCorrespondence& c : correspondences) {
+    const double x = c.edvs_pixel.x(), y = c.edvs_pixel.y();
+    const bool left = x<corner_w - 0.5, right = x> width - 0.5 - corner_w;
+    const bool top = y<corner_h - 0.5, bottom = y> height - 0.5 - corner_h;
+    if ((left || right) && (top || bottom)) ++coverage.corners[(top ? 0 : 2) + (left ? 0 : 1)];
+    if (coverage.min_depth_m == 0.0 || c.depth_m < coverage.min_depth_m) {
+      coverage.min_depth_m = c.depth_m;
+    }
+    coverage.max_depth_m = std::max(coverage.max_depth_m, c.depth_m);
+  }
+  return coverage;
+}
+
+std::string advisePoseDiversity(const DedvsCalibrationResult& result,
+                                const LedPoseCoverage& coverage, double max_rotation_std_deg) {
+  require(std::isfinite(max_rotation_std_deg) && max_rotation_std_deg > 0.0,
+          "advisePoseDiversity: max_rotation_std_deg must be positive");
+  const std::array<std::size_t, 4>& k = coverage.corners;
+  const std::size_t in_corners = k[0] + k[1] + k[2] + k[3];
+  char where[256];
+  std::snprintf(where, sizeof(where),
+                "%zu of the %zu poses had the LED in a corner of the eDVS image (top-left %zu, "
+                "top-right %zu, bottom-left %zu, bottom-right %zu)",
+                in_corners, coverage.poses, k[0], k[1], k[2], k[3]);
+  if (!result.uncertainty) {
+    return std::string("the poses do not determine the calibration (singular covariance): ") +
+           where +
+           ". Rest the LED at many places over the whole eDVS image, half of them in its four "
+           "corners, near and far.";
+  }
+  const double std_deg = result.uncertainty->rotation_std_deg;
+  if (std_deg <= max_rotation_std_deg) return {};
+  // The information grows with the poses: this many more poses of the same kind reach the
+  // target; poses in the corners count several times as much.
+  const double ratio = std_deg / max_rotation_std_deg;
+  const auto more = static_cast<std::size_t>(
+      std::ceil(static_cast<double>(coverage.poses) * (ratio * ratio - 1.0)));
+  char text[768];
+  std::snprintf(text, sizeof(text),
+                "the rotation is uncertain (standard deviation %.3f deg, above %.3f deg): a small "
+                "rotation of the eDVS and a shift of its principal point (std %.2f, %.2f px, "
+                "correlation %.2f) move the LED almost alike, and only LED positions in the "
+                "corners of the eDVS image tell them apart. %s. Record about %zu more rests "
+                "(fewer when they are in the corners): about half of the rests with the LED in "
+                "the four corners, as close to them as the whole spot stays in view, near and far.",
+                std_deg, max_rotation_std_deg, result.uncertainty->principal_point_std_px.x(),
+                result.uncertainty->principal_point_std_px.y(),
+                result.uncertainty->rotation_principal_point_correlation, where, more);
+  return text;
 }
 
 ExtrinsicError extrinsicError(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {

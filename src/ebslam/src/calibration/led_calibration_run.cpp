@@ -85,6 +85,10 @@ void LedCalibrationRunConfig::validate() const {
           "LedCalibrationRunConfig: need 0 < min_depth_m <= max_depth_m");
   require(std::isfinite(max_tilt_deg) && max_tilt_deg >= 0.0 && max_tilt_deg < 80.0,
           "LedCalibrationRunConfig: max_tilt_deg must lie in [0, 80)");
+  require(corner_pose_fraction >= 0.0 && corner_pose_fraction <= 1.0 &&
+              corner_size_fraction > 0.0 && corner_size_fraction <= 0.5,
+          "LedCalibrationRunConfig: corner_pose_fraction must lie in [0, 1] and "
+          "corner_size_fraction in (0, 0.5]");
   require(squares >= 1 && squares % 2 == 1 && squares <= 101,
           "LedCalibrationRunConfig: squares must be odd, in [1, 101]");
   require(std::isfinite(square_size_m) && square_size_m > 0.0,
@@ -131,20 +135,32 @@ Scene calibrationPlate(const LedCalibrationRunConfig& config) {
   return scene;
 }
 
-// A depth-frame point of the LED for plate pose k: at a random eDVS pixel (every other pose in
-// the outer part of the image, where rotation and principal point differ most and the
-// distortion is largest) and depth, seen by the depth camera too.
+// A depth-frame point of the LED for plate pose k: at a random eDVS pixel (a share of the poses
+// in the image's corners, where rotation and principal point differ most and the distortion is
+// largest, the corners in turn; the others anywhere) and depth, seen by the depth camera too.
 Eigen::Vector3d randomLedPoint(const LedCalibrationRunConfig& config, const DepthView& view, int k,
                                std::mt19937_64& rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const DedvsSimulatorConfig& sim = config.simulator;
   const CameraModel& edvs = sim.edvs;
   const double m = config.border_margin_px;
+  // Pose k is a corner pose when the running count of corner poses steps at k (spread evenly).
+  const double share = config.corner_pose_fraction;
+  const int corner_poses_before = static_cast<int>(std::floor(k * share + 1e-9));
+  const bool corner_pose =
+      static_cast<int>(std::floor((k + 1) * share + 1e-9)) > corner_poses_before;
+  const int corner = corner_poses_before % 4;  // top-left, top-right, bottom-left, bottom-right
+  const double corner_w = config.corner_size_fraction * edvs.width;
+  const double corner_h = config.corner_size_fraction * edvs.height;
   for (int attempt = 0; attempt <= 10000; ++attempt) {
-    const Eigen::Vector2d v(m + unit(rng) * (edvs.width - 1 - 2 * m),
-                            m + unit(rng) * (edvs.height - 1 - 2 * m));
-    const Eigen::Vector2d centre(0.5 * (edvs.width - 1), 0.5 * (edvs.height - 1));
-    if (k % 2 == 1 && (v - centre).norm() < 0.3 * (edvs.width + edvs.height) / 2.0) continue;
+    Eigen::Vector2d v(m + unit(rng) * (edvs.width - 1 - 2 * m),
+                      m + unit(rng) * (edvs.height - 1 - 2 * m));
+    if (corner_pose) {
+      const double dx = unit(rng) * std::max(0.0, corner_w - m);
+      const double dy = unit(rng) * std::max(0.0, corner_h - m);
+      v.x() = corner % 2 == 0 ? m + dx : edvs.width - 1 - m - dx;
+      v.y() = corner < 2 ? m + dy : edvs.height - 1 - m - dy;
+    }
     const double z = config.min_depth_m + unit(rng) * (config.max_depth_m - config.min_depth_m);
     const std::optional<Eigen::Vector3d> ray = edvs.backprojectRay(v);
     if (!ray) continue;

@@ -146,6 +146,9 @@ BumpReading ClosedLoopSimulator::step(const VelocityCommand& command, double dt_
   const int substeps = std::max(1, static_cast<int>(std::ceil(dt_s / robot.integration_step_s)));
   const double h = dt_s / substeps;
   const double t_end = t_s_ + dt_s;
+  const bool render_per_substep = config_.render_per_substep;
+  substeps_.clear();
+  substeps_.emplace_back(t_s_, pose_);
   for (int i = 0; i < substeps; ++i) {
     velocity_.v_mps = approach(velocity_.v_mps, target_v, robot.max_acceleration_mps2 * h);
     velocity_.omega_rps =
@@ -170,7 +173,13 @@ BumpReading ClosedLoopSimulator::step(const VelocityCommand& command, double dt_
     }
     pose_ = Pose2{position.x(), position.y(), wrapAngle(pose_.theta + velocity_.omega_rps * h)};
     const double t1 = i + 1 == substeps ? t_end : t_s_ + h;
-    if (config_.simulate_events) stream_.moveTo(cameraPose(pose_), t1, events);
+    if (config_.simulate_events) {
+      if (render_per_substep) {
+        stream_.moveTo(cameraPose(pose_), t1, events);
+      } else {
+        substeps_.emplace_back(t1, pose_);
+      }
+    }
     t_s_ = t1;
     while (next_ground_truth_s_ <= t_s_ + 1e-12) {
       // Record the pose at the sub-step end that reaches the ground-truth time (sub-steps are
@@ -178,6 +187,29 @@ BumpReading ClosedLoopSimulator::step(const VelocityCommand& command, double dt_
       ground_truth_.push_back(se2ToFloorPose(t_s_, pose_.x, pose_.y, pose_.theta));
       next_ground_truth_s_ += 1.0 / config_.ground_truth_rate_hz;
     }
+  }
+  if (config_.simulate_events && !render_per_substep) {
+    // The camera along the sub-steps' path, linear in position and heading between sub-step
+    // ends (as moveTo per sub-step), rendered at the event simulator's own rate.
+    const auto pose_at = [this](double t) {
+      const auto after = std::lower_bound(
+          substeps_.begin() + 1, substeps_.end(), t,
+          [](const std::pair<double, Pose2>& s, double time) { return s.first < time; });
+      const auto& b = after == substeps_.end() ? substeps_.back() : *after;
+      const auto& a = after == substeps_.end() ? substeps_.back() : *(after - 1);
+      const double span = b.first - a.first;
+      const double f = span > 0.0 ? std::clamp((t - a.first) / span, 0.0, 1.0) : 1.0;
+      const Pose2 p{a.second.x + f * (b.second.x - a.second.x),
+                    a.second.y + f * (b.second.y - a.second.y),
+                    a.second.theta + f * wrapAngle(b.second.theta - a.second.theta)};
+      return cameraPose(p);
+    };
+    stream_.advance(
+        t_end, pose_at,
+        [&events](const EventVector& step, const std::vector<std::uint8_t>&, double) {
+          events.insert(events.end(), step.begin(), step.end());
+        },
+        false);
   }
   Eigen::Vector2d push = Eigen::Vector2d::Zero();
   if (target_v != 0.0) {

@@ -91,6 +91,7 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
   slam_config.filter.seed = config.seed;
   std::optional<EventSlam2d> slam;
   std::optional<Explorer> explorer;
+  std::optional<CoverageExplorer> coverer;
   std::optional<RandomBumpAndTurn> baseline;
   std::optional<TrackingMonitor> monitor;
   if (config.random_baseline) {
@@ -103,7 +104,11 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
         slam_config,
         CeilingCamera(simulator.config().events.camera, simulator.config().ceiling_height_m),
         start);
-    explorer.emplace(config.exploration, Eigen::Vector2d(start.x, start.y));
+    if (config.coverage_planner) {
+      coverer.emplace(config.coverage, start);
+    } else {
+      explorer.emplace(config.exploration, Eigen::Vector2d(start.x, start.y));
+    }
     monitor.emplace(config.tracking, CeilingCamera(simulator.config().events.camera,
                                                    simulator.config().ceiling_height_m));
   }
@@ -145,6 +150,37 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
     VelocityCommand command;
     if (baseline) {
       command = baseline->update(t, bump);
+    } else if (coverer) {
+      const double c0 = cpuSeconds();
+      command = coverer->update(t, estimate, bump);
+      result.planner_seconds += cpuSeconds() - c0;
+      ++result.planner_calls;
+      if (coverer->done() && result.done_time_s < 0.0) {
+        result.done_time_s = t;
+        result.done_share = coverer->coveredShare();
+        result.covered_at_done = coverage.coveredFraction();
+      }
+      if (coverer->message() != last_message) {
+        last_message = coverer->message();
+        std::ostringstream text;
+        text.precision(1);
+        text << std::fixed << t << " s: " << toString(coverer->state())
+             << (last_message.empty() ? "" : ": " + last_message);
+        result.messages.push_back(text.str());
+      }
+      if (config.stop_when_done && coverer->state() == CoverageState::kDone) {
+        ExplorationSample sample;
+        sample.t_s = t;
+        sample.covered = coverage.coveredFraction();
+        sample.bumps = result.bump_events;
+        sample.contrast = monitor->contrast();
+        sample.lost = monitor->state() == TrackingState::kLost;
+        sample.position_error_m =
+            std::hypot(estimate.x - simulator.pose().x, estimate.y - simulator.pose().y);
+        if (sample.covered >= 0.9 && result.time_to_90_s < 0.0) result.time_to_90_s = t;
+        result.samples.push_back(sample);
+        break;
+      }
     } else {
       const double c0 = cpuSeconds();
       command = explorer->update(t, estimate, bump, &slam->normalisation());
@@ -168,8 +204,13 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
       const Pose2 p = slam->estimate();
       result.estimate.push_back(se2ToFloorPose(simulator.time(), p.x, p.y, p.theta));
       const TrackingState tracking = monitor->update(simulator.time(), events, p, slam->map());
-      if (config.relocalise_when_lost) {
+      if (explorer && config.relocalise_when_lost) {
         explorer->setLocalisationLost(tracking == TrackingState::kLost, simulator.time());
+      }
+      if (coverer && config.slow_when_lost) {
+        const bool lost = tracking == TrackingState::kLost;
+        coverer->setLocalisationUncertain(lost);
+        if (lost) result.slow_seconds += config.control_period_s;
       }
     }
     if (bump.contact() && !was_contact) ++result.bump_events;
@@ -177,6 +218,22 @@ ExplorationRunResult runExploration(const FloorPlan& plan, const ExplorationRunC
     coverage.cover(Eigen::Vector2d(simulator.pose().x, simulator.pose().y));
   }
   result.ground_truth = simulator.groundTruth();
+  if (coverer) {
+    const CoverageMap& map = coverer->map();
+    for (int c = 0; c < map.size(); ++c) {
+      if (map.hardBlocked()[c] == 0 && map.softBlocked()[c] == 0) continue;
+      result.hex_centres.push_back(map.centre(c));
+      result.z.push_back(0.0f);
+      result.e.push_back(map.visitDistance(c));
+      result.gain.push_back(0.0f);
+      result.blocked.push_back(1);
+    }
+    result.bump_points = map.contacts();
+    result.last_path = coverer->path();
+    result.lanes = coverer->lanes();
+    result.slam_map = mapToImage(slam->map());
+    result.collapses = monitor->collapses();
+  }
   if (explorer) {
     const ExplorationPlanner& planner = explorer->planner();
     for (int c = 0; c < planner.grid().size(); ++c) {

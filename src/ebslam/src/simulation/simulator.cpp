@@ -483,10 +483,12 @@ void EventStream::moveTo(const Eigen::Isometry3d& pose, double t_end_s, EventVec
         if (noise_labels != nullptr) {
           noise_labels->insert(noise_labels->end(), is_noise.begin(), is_noise.end());
         }
-      });
+      },
+      noise_labels != nullptr);
 }
 
-void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink) {
+void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink,
+                          bool with_labels) {
   State& st = *state_;
   require(std::isfinite(t_end_s) && t_end_s > st.t,
           "EventStream::advance: the end time must be finite and after time()");
@@ -508,8 +510,7 @@ void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink&
     double motion_px = 0.0;
     for (const Eigen::Vector3d& probe : st.probe_rays) {
       const std::optional<Eigen::Vector3d> world = st.renderer.hitPoint(st.pose, probe);
-      const Eigen::Vector2d start =
-          camera.distort(camera.principal_point + camera.focal_px * probe.head<2>());
+      const Eigen::Vector2d start = *camera.project(probe);  // probe.z() = 1
       if (!world) {
         // No plane: fall back to the rotation alone (points at infinity).
         const Eigen::Vector3d direction =
@@ -537,7 +538,8 @@ void EventStream::advance(double t_end_s, const PoseAt& pose_at, const StepSink&
     ++st.render_steps;
     st.step_events.clear();
     st.step_labels.clear();
-    const std::size_t signal = st.generator.step(st.intensity, t1, st.step_events, &st.step_labels);
+    const std::size_t signal = st.generator.step(st.intensity, t1, st.step_events,
+                                                 with_labels ? &st.step_labels : nullptr);
     st.signal_events += signal;
     st.noise_events += st.step_events.size() - signal;
     st.pose = next_pose;

@@ -1,8 +1,10 @@
 #include "ebslam/slam/camera_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace ebslam {
 namespace {
@@ -23,7 +25,126 @@ double maxSensorRadius(const CameraModel& camera) {
   return std::hypot(dx, dy);
 }
 
+// The CameraInfo lenses on normalised coordinates (x, y) = (p_x, p_y) / p_z.
+Eigen::Vector2d distortNormalised(const CameraModel& camera, const Eigen::Vector2d& n) {
+  const auto& k = camera.lens_coefficients;
+  const double x = n.x(), y = n.y();
+  const double r2 = x * x + y * y;
+  if (camera.distortion_model == DistortionModel::kEquidistant) {
+    const double r = std::sqrt(r2);
+    if (r == 0.0) return n;
+    const double theta = std::atan(r);
+    const double t2 = theta * theta;
+    const double theta_d = theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+    return n * (theta_d / r);
+  }
+  const double radial = 1.0 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
+  return {x * radial + 2.0 * k[2] * x * y + k[3] * (r2 + 2.0 * x * x),
+          y * radial + k[2] * (r2 + 2.0 * y * y) + 2.0 * k[3] * x * y};
+}
+
+// Inverse of distortNormalised: Newton's method on theta (equidistant) or on (x, y) (plumb_bob)
+// from the distorted position; std::nullopt without a converged solution in the lens' valid
+// range (theta < pi / 2; plumb_bob's radial polynomial increasing).
+std::optional<Eigen::Vector2d> undistortNormalised(const CameraModel& camera,
+                                                   const Eigen::Vector2d& nd) {
+  const auto& k = camera.lens_coefficients;
+  if (!nd.allFinite()) return std::nullopt;
+  if (camera.distortion_model == DistortionModel::kEquidistant) {
+    const double theta_d = nd.norm();
+    if (theta_d == 0.0) return nd;
+    double theta = std::min(theta_d, 1.5);
+    for (int iteration = 0; iteration < 50; ++iteration) {
+      const double t2 = theta * theta;
+      const double g =
+          theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - theta_d;
+      const double dg =
+          1.0 + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
+      if (!(dg > 0.0)) return std::nullopt;
+      const double step = g / dg;
+      theta -= step;
+      if (!(theta > 0.0) || theta >= 0.5 * kPi) return std::nullopt;
+      if (std::abs(step) < 1e-14) break;
+    }
+    const double t2 = theta * theta;
+    if (std::abs(theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - theta_d) >
+        1e-10 * (1.0 + theta_d)) {
+      return std::nullopt;
+    }
+    return nd * (std::tan(theta) / theta_d);
+  }
+  Eigen::Vector2d n = nd;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double x = n.x(), y = n.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
+    const double g = 2.0 * k[0] + r2 * (4.0 * k[1] + r2 * 6.0 * k[4]);  // d radial / d(r^2) * 2
+    // Jacobian [[a, b], [b, d]] of the distortion (symmetric).
+    const double a = radial + g * x * x + 2.0 * k[2] * y + 6.0 * k[3] * x;
+    const double b = g * x * y + 2.0 * k[2] * x + 2.0 * k[3] * y;
+    const double d = radial + g * y * y + 6.0 * k[2] * y + 2.0 * k[3] * x;
+    const Eigen::Vector2d residual = distortNormalised(camera, n) - nd;
+    const double det = a * d - b * b;
+    if (!(det > 0.0)) return std::nullopt;
+    const Eigen::Vector2d step((d * residual.x() - b * residual.y()) / det,
+                               (a * residual.y() - b * residual.x()) / det);
+    n -= step;
+    if (!n.allFinite()) return std::nullopt;
+    if (step.norm() < 1e-14 * (1.0 + n.norm())) break;
+  }
+  if ((distortNormalised(camera, n) - nd).norm() > 1e-10 * (1.0 + nd.norm())) return std::nullopt;
+  // The radial polynomial r (1 + k1 r^2 + k2 r^4 + k3 r^6) must still increase at the solution,
+  // otherwise it is the fold's far branch.
+  const double r2 = n.squaredNorm();
+  if (!(1.0 + r2 * (3.0 * k[0] + r2 * (5.0 * k[1] + r2 * 7.0 * k[4])) > 0.0)) return std::nullopt;
+  return n;
+}
+
 }  // namespace
+
+bool CameraModel::isSquarePinhole() const {
+  if (fy() != focal_px) return false;
+  if (hasOpenCvLens()) {
+    return std::all_of(lens_coefficients.begin(), lens_coefficients.end(),
+                       [](double c) { return c == 0.0; });
+  }
+  return kappa1 == 0.0 && kappa2 == 0.0;
+}
+
+CameraModel CameraModel::scaledTo(int new_width, int new_height) const {
+  if (new_width <= 0 || new_height <= 0 || new_width > 65535 || new_height > 65535) {
+    throw std::invalid_argument("CameraModel::scaledTo: width and height must lie in [1, 65535]");
+  }
+  const double s = static_cast<double>(new_width) / width;
+  CameraModel out = *this;
+  out.width = new_width;
+  out.height = new_height;
+  out.focal_px = focal_px * s;
+  out.focal_y_px = focal_y_px * s;
+  const Eigen::Vector2d old_centre(0.5 * (width - 1), 0.5 * (height - 1));
+  const Eigen::Vector2d new_centre(0.5 * (new_width - 1), 0.5 * (new_height - 1));
+  out.principal_point = new_centre + (principal_point - old_centre) * s;
+  out.kappa1 = kappa1 / s;        // [1/pixel]
+  out.kappa2 = kappa2 / (s * s);  // [1/pixel^2]
+  return out;
+}
+
+CameraModel CameraModel::preset(const std::string& name, const CameraModel& lens) {
+  static const std::pair<const char*, std::pair<int, int>> kPresets[] = {{"edvs128", {128, 128}},
+                                                                         {"davis240", {240, 180}},
+                                                                         {"davis346", {346, 260}},
+                                                                         {"vga", {640, 480}},
+                                                                         {"hd720", {1280, 720}}};
+  std::string names;
+  for (const auto& [preset_name, size] : kPresets) {
+    if (name == preset_name) return lens.scaledTo(size.first, size.second);
+    names += std::string(names.empty() ? "" : ", ") + preset_name;
+  }
+  throw std::invalid_argument("CameraModel::preset: unknown sensor '" + name +
+                              "' (known: " + names + ")");
+}
+
+CameraModel CameraModel::preset(const std::string& name) { return preset(name, CameraModel{}); }
 
 double CameraModel::focalFromOpeningAngle(double alpha_fov_rad, int sensor_size) {
   if (!(alpha_fov_rad > 0.0 && alpha_fov_rad < kPi)) {
@@ -42,8 +163,37 @@ void CameraModel::validate() const {
   if (!(std::isfinite(focal_px) && focal_px > 0.0)) {
     throw std::invalid_argument("CameraModel: focal_px must be positive and finite");
   }
-  if (!principal_point.allFinite() || !std::isfinite(kappa1) || !std::isfinite(kappa2)) {
+  if (!principal_point.allFinite() || !std::isfinite(kappa1) || !std::isfinite(kappa2) ||
+      !std::all_of(lens_coefficients.begin(), lens_coefficients.end(),
+                   [](double c) { return std::isfinite(c); })) {
     throw std::invalid_argument("CameraModel: principal point and distortion must be finite");
+  }
+  if (!(std::isfinite(focal_y_px) && focal_y_px >= 0.0)) {
+    throw std::invalid_argument("CameraModel: focal_y_px must be positive (or 0 = focal_px)");
+  }
+  if (hasOpenCvLens()) {
+    // Every pixel on the sensor's border must undistort (inside, the lens is monotonic
+    // along each ray from the centre up to the border: checked by the Newton solution's
+    // derivative test).
+    for (int x = 0; x < width; ++x) {
+      for (int y : {0, height - 1}) {
+        if (!undistort(Eigen::Vector2d(x, y))) {
+          throw std::invalid_argument(
+              "CameraModel: the lens distortion cannot be inverted at pixel (" + std::to_string(x) +
+              ", " + std::to_string(y) + ")");
+        }
+      }
+    }
+    for (int y = 0; y < height; ++y) {
+      for (int x : {0, width - 1}) {
+        if (!undistort(Eigen::Vector2d(x, y))) {
+          throw std::invalid_argument(
+              "CameraModel: the lens distortion cannot be inverted at pixel (" + std::to_string(x) +
+              ", " + std::to_string(y) + ")");
+        }
+      }
+    }
+    return;
   }
   // r L(r) = r (1 + k1 r + k2 r^2) must increase over the radii in use, otherwise its inverse
   // is ambiguous: d (r L(r)) / dr = 1 + 2 k1 r + 3 k2 r^2 > 0 on a fine grid. Radii in use:
@@ -76,8 +226,14 @@ std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p_cam
   if (!(p_camera.z() > 0.0) || !p_camera.allFinite()) {
     return std::nullopt;
   }
-  const Eigen::Vector2d undistorted =
-      principal_point + focal_px * p_camera.head<2>() / p_camera.z();  // eq. 6.1
+  const Eigen::Vector2d n = p_camera.head<2>() / p_camera.z();
+  if (hasOpenCvLens()) {
+    const Eigen::Vector2d nd = distortNormalised(*this, n);
+    return Eigen::Vector2d(principal_point.x() + focal_px * nd.x(),
+                           principal_point.y() + fy() * nd.y());
+  }
+  const Eigen::Vector2d undistorted(principal_point.x() + focal_px * n.x(),
+                                    principal_point.y() + fy() * n.y());  // eq. 6.1
   return distort(undistorted);
 }
 
@@ -106,6 +262,12 @@ std::optional<double> invertRadius(const CameraModel& camera, double target) {
 }  // namespace
 
 Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& undistorted_px) const {
+  if (hasOpenCvLens()) {
+    const Eigen::Vector2d n((undistorted_px.x() - principal_point.x()) / focal_px,
+                            (undistorted_px.y() - principal_point.y()) / fy());
+    const Eigen::Vector2d nd = distortNormalised(*this, n);
+    return {principal_point.x() + focal_px * nd.x(), principal_point.y() + fy() * nd.y()};
+  }
   const Eigen::Vector2d d = undistorted_px - principal_point;
   const double r = d.norm();
   if (distortion_model == DistortionModel::kDistortEq63) {
@@ -122,6 +284,14 @@ Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& undistorted_px) cons
 }
 
 std::optional<Eigen::Vector2d> CameraModel::undistort(const Eigen::Vector2d& distorted_px) const {
+  if (hasOpenCvLens()) {
+    const Eigen::Vector2d nd((distorted_px.x() - principal_point.x()) / focal_px,
+                             (distorted_px.y() - principal_point.y()) / fy());
+    const std::optional<Eigen::Vector2d> n = undistortNormalised(*this, nd);
+    if (!n) return std::nullopt;
+    return Eigen::Vector2d(principal_point.x() + focal_px * n->x(),
+                           principal_point.y() + fy() * n->y());
+  }
   const Eigen::Vector2d d = distorted_px - principal_point;
   const double rd = d.norm();
   if (distortion_model == DistortionModel::kUndistortEq83) {
@@ -149,8 +319,8 @@ std::optional<Eigen::Vector3d> CameraModel::backprojectRay(const Eigen::Vector2d
   if (!undistorted) {
     return std::nullopt;
   }
-  const Eigen::Vector2d xy = (*undistorted - principal_point) / focal_px;
-  return Eigen::Vector3d(xy.x(), xy.y(), 1.0);
+  return Eigen::Vector3d((undistorted->x() - principal_point.x()) / focal_px,
+                         (undistorted->y() - principal_point.y()) / fy(), 1.0);
 }
 
 }  // namespace ebslam

@@ -216,13 +216,20 @@ void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
   const double pcy = cam.principal_point.y();
   const double u_max = cam.width - 0.5;
   const double v_max = cam.height - 0.5;
+  const bool eq63 = cam.distortion_model == DistortionModel::kDistortEq63 && cam.fy() == cam.fx();
   const auto project = [&](double px, double py, double& u, double& v) {
-    const double dx = px * inv_w;
-    const double dy = py * inv_w;
-    const double rr = std::sqrt(dx * dx + dy * dy);
-    const double l = 1.0 + k1 * rr + k2 * rr * rr;
-    u = pcx + dx * l;
-    v = pcy + dy * l;
+    if (!eq63) {  // another lens: the camera's own projection
+      const Eigen::Vector2d e = camera_.project(Eigen::Vector2d(px, py));
+      u = e.x();
+      v = e.y();
+    } else {
+      const double dx = px * inv_w;
+      const double dy = py * inv_w;
+      const double rr = std::sqrt(dx * dx + dy * dy);
+      const double l = 1.0 + k1 * rr + k2 * rr * rr;
+      u = pcx + dx * l;
+      v = pcy + dy * l;
+    }
     return u >= -0.5 && v >= -0.5 && u < u_max && v < v_max;
   };
   // Rotations R(-theta) scaled in: camera coordinates of u are R(-theta) (u - t).
@@ -230,7 +237,7 @@ void EventSlam2d::updateNormalisation(const Pose2& from, const Pose2& to) {
   const double cb = std::cos(to.theta), sb = std::sin(to.theta);
   const double cx_mid = 0.5 * (from.x + to.x);
   const double half_span = 0.5 * std::abs(from.x - to.x) + radius;
-  if (k1 == 0.0 && k2 == 0.0) {
+  if (cam.isSquarePinhole()) {
     updateNormalisationPinhole(from, to, r0, r1, cx_mid - half_span, cx_mid + half_span);
     return;
   }
@@ -317,19 +324,26 @@ void EventSlam2d::updateNormalisationPinhole(const Pose2& from, const Pose2& to,
     clipLinear(ub0, dub, u_lo, u_hi, lo, hi);
     clipLinear(vb0, dvb, v_lo, v_hi, lo, hi);
     const std::size_t row = static_cast<std::size_t>(r) * z.width;
-    for (int c = lo; c <= hi; ++c) {
+    // A cell not visible under both poses is not updated (7.2.3). Each coordinate is monotone
+    // in c (also as rounded), so the visible cells are one run: trim clipLinear's widened
+    // range to it with the exact per-cell test, then update the run without branches (which
+    // vectorises; the same arithmetic per cell).
+    const auto visible = [&](int c) {
       const double ua = ua0 + c * dua, va = va0 + c * dva;
       const double ub = ub0 + c * dub, vb = vb0 + c * dvb;
-      // A cell not visible under both poses is not updated (7.2.3).
-      if (!(ua >= u_lo && ua < u_hi && va >= v_lo && va < v_hi && ub >= u_lo && ub < u_hi &&
-            vb >= v_lo && vb < v_hi)) {
-        continue;
-      }
-      const double du = ua - ub;
-      const double dv = va - vb;
+      return ua >= u_lo && ua < u_hi && va >= v_lo && va < v_hi && ub >= u_lo && ub < u_hi &&
+             vb >= v_lo && vb < v_hi;
+    };
+    while (lo <= hi && !visible(lo)) ++lo;
+    while (hi >= lo && !visible(hi)) --hi;
+    const float z0 = z0_;
+#pragma omp simd
+    for (int c = lo; c <= hi; ++c) {
+      const double du = (ua0 + c * dua) - (ub0 + c * dub);
+      const double dv = (va0 + c * dva) - (vb0 + c * dvb);
       const std::size_t k = row + c;
       zd[k] += static_cast<float>(std::sqrt(du * du + dv * dv));  // eq. 7.7
-      inv_z[k] = 1.0f / (zd[k] + z0_);
+      inv_z[k] = 1.0f / (zd[k] + z0);
       md[k] = od[k] * inv_z[k];
     }
   }

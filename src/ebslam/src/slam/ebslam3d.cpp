@@ -82,9 +82,6 @@ void Ebslam3dConfig::validate() const {
   if (!positive(motion_window_s) || !positive(motion_time_s)) {
     fail("motion_window_s and motion_time_s must be positive");
   }
-  if (!(velocity_prediction >= 0.0 && velocity_prediction <= 1.0)) {
-    fail("velocity_prediction must be in [0, 1]");
-  }
   if (!positive(health.fast_time_s) || !positive(health.slow_time_s) ||
       !positive(health.recover_hold_s) || !(health.warmup_s >= 0.0) ||
       !std::isfinite(health.warmup_s)) {
@@ -97,6 +94,9 @@ void Ebslam3dConfig::validate() const {
   if (!(health.min_surface_value > 0.0) || !std::isfinite(health.min_surface_value) ||
       !(health.sample_interval_s >= 0.0) || !std::isfinite(health.sample_interval_s)) {
     fail("health: need a positive min_surface_value and a finite sample_interval_s >= 0");
+  }
+  if (!(health.max_event_gap_s >= 0.0) || !std::isfinite(health.max_event_gap_s)) {
+    fail("health: max_event_gap_s must be finite and >= 0 (0 = off)");
   }
   if (!(rays.min_depthless_share >= 0.0 && rays.min_depthless_share <= 1.0) ||
       !positive(rays.share_time_s)) {
@@ -192,20 +192,6 @@ void ParticleSet3D::assign(const std::vector<Pose3>& poses) {
   scores_.assign(count, 1.0);
   scratch_.resize(count * 22);
   scratch_w_.resize(count);
-}
-
-void ParticleSet3D::predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation) {
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    const Eigen::Quaternionf q =
-        (Eigen::Quaternionf(qw_[i], qx_[i], qy_[i], qz_[i]) * dq).normalized();
-    qw_[i] = q.w();
-    qx_[i] = q.x();
-    qy_[i] = q.y();
-    qz_[i] = q.z();
-    x_[i] += translation.x();
-    y_[i] += translation.y();
-    z_[i] += translation.z();
-  }
 }
 
 std::vector<int> ParticleSet3D::best(int count) const {
@@ -672,8 +658,18 @@ void EventSlam3d::runBatch(int b, ProcessStats& stats) {
   // part), as variances.
   double dt_s = 0.0;
   if (have_prev_batch_) {
-    dt_s = std::min(config_.max_diffusion_dt_s,
-                    1e-6 * static_cast<double>(batch_end_us_ - prev_batch_end_us_));
+    const double gap_s = 1e-6 * static_cast<double>(batch_end_us_ - prev_batch_end_us_);
+    dt_s = std::min(config_.max_diffusion_dt_s, gap_s);
+    // A gap in the events: the sensor saw nothing, its motion is unknown. Searched before this
+    // batch is scored (with the gyro prior the particles are then turned by its rotation over
+    // the gap).
+    const TrackingHealthConfig& c = config_.health;
+    if (c.max_event_gap_s > 0.0 && gap_s > c.max_event_gap_s && health_started_ &&
+        health_.state != TrackingState::kLost &&
+        1e-6 * static_cast<double>(prev_batch_end_us_ - health_start_us_) >= c.warmup_s) {
+      ++health_.event_gaps;
+      enterLost();
+    }
   }
   prev_batch_end_us_ = batch_end_us_;
   have_prev_batch_ = true;
@@ -687,18 +683,6 @@ void EventSlam3d::runBatch(int b, ProcessStats& stats) {
   const double sr = scale_r * config_.sigma_rotation_per_sqrt_s;
   const double var_p = b * config_.sigma_position_m * config_.sigma_position_m + dt_s * sp * sp;
   const double var_r = b * config_.sigma_rotation_rad * config_.sigma_rotation_rad + dt_s * sr * sr;
-  // With the gyro prior active the gyro predicts the rotation; the velocity only the translation.
-  const bool gyro_active = config_.imu.enabled && !gyro_.empty();
-  if (config_.velocity_prediction > 0.0 && !lost && dt_s > 0.0) {
-    const Eigen::Vector3d w =
-        gyro_active ? Eigen::Vector3d::Zero()
-                    : Eigen::Vector3d(config_.velocity_prediction * dt_s * angular_velocity_);
-    const double angle = w.norm();
-    const Eigen::Quaterniond dq(Eigen::AngleAxisd(
-        angle, angle > 0.0 ? Eigen::Vector3d(w / angle) : Eigen::Vector3d::UnitZ()));
-    particles_.predict(dq.cast<float>(),
-                       (config_.velocity_prediction * dt_s * linear_velocity_).cast<float>());
-  }
   // Gyro rotation prior: rotates the particles; the rotation diffusion around it (var_r without).
   const double var_r_batch =
       applyGyroPrior(var_r, b * config_.sigma_rotation_rad * config_.sigma_rotation_rad);
@@ -747,8 +731,6 @@ double EventSlam3d::diffusionScale(double speed, double reference) const {
 void EventSlam3d::restartMotion() {
   motion_window_open_ = false;
   motion_prev_set_ = false;
-  angular_velocity_.setZero();
-  linear_velocity_.setZero();
 }
 
 void EventSlam3d::updateMotion() {
@@ -794,11 +776,6 @@ void EventSlam3d::updateMotion() {
           1.0 - std::exp(-std::min(dt, 4.0 * config_.motion_window_s) / config_.motion_time_s);
       angular_speed_ += gain * (angle / used_s - angular_speed_);
       linear_speed_ += gain * (distance / used_s - linear_speed_);
-      Eigen::Quaterniond d = motion_prev_mean_.orientation.conjugate() * mean.orientation;
-      if (d.w() < 0.0) d.coeffs() = -d.coeffs();
-      const Eigen::AngleAxisd rotation(d);
-      angular_velocity_ = rotation.angle() / used_s * rotation.axis();
-      linear_velocity_ = (mean.position - motion_prev_mean_.position) / used_s;
     }
   }
   motion_prev_mean_ = mean;
@@ -897,12 +874,7 @@ void EventSlam3d::updateHealth(int b, double dt_s) {
   switch (h.state) {
     case TrackingState::kTracking:
       if (h.fit_fast < c.lost_fit) {
-        h.state = TrackingState::kLost;
-        h.relocalised = false;
-        ++h.lost_count;
-        lost_since_us_ = batch_end_us_;
-        search_round_ = 0;
-        if (r.enabled) reseed();
+        enterLost();
       } else if (h.fit_fast >= c.recover_fit) {
         last_good_ = expected_;
       }
@@ -926,9 +898,7 @@ void EventSlam3d::updateHealth(int b, double dt_s) {
       break;
     case TrackingState::kRecovering:
       if (h.fit_fast < c.lost_fit) {
-        h.state = TrackingState::kLost;
-        ++h.lost_count;
-        if (r.enabled) reseed();
+        enterLost();
       } else if (h.fit_fast >= c.recover_fit) {
         above_recover_s_ += sample_dt_s;
         if (above_recover_s_ >= c.recover_hold_s) {
@@ -945,6 +915,18 @@ void EventSlam3d::updateHealth(int b, double dt_s) {
     case TrackingState::kGlobalSearch:  // EB-PF's state; EB-SLAM-3D never enters it
       break;
   }
+}
+
+void EventSlam3d::enterLost() {
+  TrackingHealth& h = health_;
+  if (h.state == TrackingState::kTracking) {  // a new loss (from recovering: the same one)
+    h.relocalised = false;
+    lost_since_us_ = batch_end_us_;
+    search_round_ = 0;
+  }
+  h.state = TrackingState::kLost;
+  ++h.lost_count;
+  if (config_.relocalisation.enabled) reseed();
 }
 
 void EventSlam3d::updateKeyframes() {

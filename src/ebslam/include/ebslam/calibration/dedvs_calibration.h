@@ -7,8 +7,10 @@
 // eq. 8.4 is edvs_from_depth; the result is stored as DedvsSensors::depth_from_edvs
 // (p_depth = depth_from_edvs * p_edvs). Details: docs/dedvs_core.md#calibration
 
+#include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -27,8 +29,9 @@ namespace ebslam {
 /// A calibration run of the D-eDVS simulator: the rig stands still (its depth optical frame is
 /// the world frame) and a checkerboard plate with the LED at the centre of its middle square
 /// (the middle 3 x 3 squares light) moves between random poses (stop and go: it moves for move_s,
-/// then rests for rest_s). The poses put the LED at random eDVS pixels (uniform; every other pose
-/// outside the central 60 %) and uniform depths, the plate tilted towards the rig.
+/// then rests for rest_s). The poses put the LED at random eDVS pixels (a share of them in the
+/// image's corners, the rest uniform) and uniform depths, the plate tilted towards the rig: the
+/// capture procedure of docs/dedvs_rig.md.
 struct LedCalibrationRunConfig {
   /// Sensors, noise and the true calibration. The eDVS events come from the simulator's event
   /// model (noise included), the depth from its depth camera model.
@@ -48,7 +51,14 @@ struct LedCalibrationRunConfig {
   double rest_s = 0.08;
   double min_depth_m = 0.55;  ///< LED depth range in the depth frame [m]
   double max_depth_m = 1.8;
-  double max_tilt_deg = 25.0;    ///< plate tilt about its x and y axes [deg]
+  double max_tilt_deg = 25.0;  ///< plate tilt about its x and y axes [deg]
+  /// Share of the poses with the LED in one of the eDVS image's four corners (the corners in
+  /// turn), in [0, 1]; the others put it anywhere in the image. Only LED positions far from the
+  /// image centre in both x and y tell a small rotation from a shift of the principal point.
+  double corner_pose_fraction = 0.5;
+  /// A corner: the square of this fraction of the image width and height at each image corner
+  /// (inside border_margin_px), in (0, 0.5].
+  double corner_size_fraction = 0.15;
   int squares = 9;               ///< squares per plate side (odd: the LED sits in one)
   double square_size_m = 0.035;  ///< [m]
   /// Margin of the LED's eDVS and depth pixel from the image borders [px].
@@ -195,6 +205,24 @@ enum class CalibrationStatus : std::uint8_t {
 };
 const char* toString(CalibrationStatus status);
 
+/// Standard deviations of the calibration from the covariance Ceres estimates at the solution:
+/// (J^T J)^-1 over the correspondences of the final solve, scaled by their residual variance
+/// (sum of squares / (n - 11)). A small rotation of the eDVS and a shift of its principal point
+/// move the LED almost alike; only LED positions far from the image centre tell them apart, so
+/// the rotation is the first to become uncertain when the poses stay near the centre.
+struct CalibrationUncertainty {
+  /// Rotation of depth_from_edvs [deg]: about the eDVS x, y, z axes, and along the worst
+  /// direction (square root of the covariance's largest eigenvalue).
+  Eigen::Vector3d rotation_axes_std_deg{0.0, 0.0, 0.0};
+  double rotation_std_deg = 0.0;
+  Eigen::Vector3d translation_std_mm{0.0, 0.0, 0.0};  ///< x, y, z [mm]
+  double focal_std_px = 0.0;
+  Eigen::Vector2d principal_point_std_px{0.0, 0.0};
+  /// Largest |correlation| between a rotation component and a principal point component (near
+  /// 1: the poses do not separate them).
+  double rotation_principal_point_correlation = 0.0;
+};
+
 struct DedvsCalibrationResult {
   CalibrationStatus status = CalibrationStatus::kOk;
   /// The base sensors with the fitted eDVS camera and depth_from_edvs (filled whatever the
@@ -205,6 +233,9 @@ struct DedvsCalibrationResult {
   std::size_t inliers = 0;
   int iterations = 0;                ///< both stages
   std::vector<double> residuals_px;  ///< per correspondence [px]
+  /// The solver's standard deviations; empty when the correspondences leave the parameters
+  /// undetermined (a singular covariance).
+  std::optional<CalibrationUncertainty> uncertainty;
 };
 
 /// Solves eq. 8.5 from `correspondences`. `base` gives the depth camera (fixed), the eDVS size,
@@ -214,6 +245,29 @@ struct DedvsCalibrationResult {
 DedvsCalibrationResult calibrateDedvs(const std::vector<LedCorrespondence>& correspondences,
                                       const DedvsSensors& base,
                                       const DedvsCalibrationConfig& config = {});
+
+/// Where the LED was in the eDVS image over the poses: the pose diversity a calibration needs.
+struct LedPoseCoverage {
+  std::size_t poses = 0;
+  /// Poses with the LED in each corner of the eDVS image (top-left, top-right, bottom-left,
+  /// bottom-right; a corner as in LedCalibrationRunConfig::corner_size_fraction).
+  std::array<std::size_t, 4> corners{};
+  double min_depth_m = 0.0;  ///< LED depth range over the poses [m]
+  double max_depth_m = 0.0;
+};
+
+/// Counts the correspondences' eDVS pixels in the corners of a width x height eDVS image
+/// (corner_size_fraction in (0, 0.5]; throws std::invalid_argument otherwise).
+LedPoseCoverage ledPoseCoverage(const std::vector<LedCorrespondence>& correspondences, int width,
+                                int height, double corner_size_fraction = 0.15);
+
+/// What the user should do with the LED plate when the calibration's rotation is uncertain
+/// (result.uncertainty's worst-direction standard deviation above max_rotation_std_deg, or no
+/// uncertainty at all), in words a user can act on; empty when the rotation is determined well
+/// enough. The default, 0.033 deg, puts a 0.1 deg error at three standard deviations.
+std::string advisePoseDiversity(const DedvsCalibrationResult& result,
+                                const LedPoseCoverage& coverage,
+                                double max_rotation_std_deg = 0.033);
 
 /// The eDVS pixel (eq. 8.4) of a depth pixel with depth, for the given sensors; std::nullopt
 /// behind the eDVS.

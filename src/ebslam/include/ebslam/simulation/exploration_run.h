@@ -19,6 +19,7 @@
 #include "ebslam/events/trajectory.h"
 #include "ebslam/simulation/closed_loop_simulator.h"
 #include "ebslam/simulation/floor_plan.h"
+#include "ebslam/slam/coverage.h"
 #include "ebslam/slam/ebslam2d.h"
 #include "ebslam/slam/ebslam2d_tracking.h"
 #include "ebslam/slam/exploration.h"
@@ -58,7 +59,15 @@ struct ExplorationRunConfig {
   double duration_s = 600.0;       ///< simulated time [s]
   double control_period_s = 0.05;  ///< controller rate 20 Hz [s]
   bool random_baseline = false;    ///< drive the bump-and-turn baseline instead (no SLAM)
-  std::uint64_t seed = 1;          ///< simulator, ceiling, filter and baseline seed
+  /// Drive the coverage planner (coverage.h) instead of the gain planner.
+  bool coverage_planner = false;
+  CoverageConfig coverage;
+  /// Coverage planner: slow down (CoverageConfig::uncertain_speed_factor) while the tracking
+  /// monitor reports EB-SLAM lost.
+  bool slow_when_lost = false;
+  /// Coverage planner: end the run once it is done and back at the start.
+  bool stop_when_done = true;
+  std::uint64_t seed = 1;  ///< simulator, ceiling, filter and baseline seed
   double coverage_resolution_m = 0.02;
   double record_period_s = 1.0;  ///< period of the coverage / error time series [s]
   /// Stop early once this covered fraction is reached (1 = never).
@@ -95,6 +104,13 @@ struct ExplorationRunResult {
   std::size_t planner_calls = 0;
   std::size_t collapses = 0;        ///< tracking -> lost verdicts of the monitor
   std::size_t relocalisations = 0;  ///< times the explorer stopped to re-localise
+  /// Coverage planner: time it reported done (-1: never), its own covered share then, and the
+  /// true covered fraction then.
+  double done_time_s = -1.0;
+  double done_share = 0.0;
+  double covered_at_done = 0.0;
+  double slow_seconds = 0.0;  ///< simulated time driven slowly while lost
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lanes;  ///< coverage lanes driven
   /// Final maps for pictures (empty for the baseline).
   std::vector<Eigen::Vector2d> hex_centres;
   std::vector<float> z, e, gain;

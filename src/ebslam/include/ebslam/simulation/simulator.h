@@ -126,7 +126,10 @@ class EventStream {
   /// pose_at(time()) should equal pose(). Throws std::invalid_argument if t_end_s is not after
   /// time() or not finite, or pose_at returns a non-finite pose (the stream is then unchanged up
   /// to the failing step).
-  void advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink);
+  /// Without `with_labels` the sink receives an empty label vector (the events are the same;
+  /// saves sorting the labels with them).
+  void advance(double t_end_s, const PoseAt& pose_at, const StepSink& sink,
+               bool with_labels = true);
   /// advance() with the camera moving from pose() to `pose` at constant velocity (linear
   /// position, slerp orientation) over [time(), t_end_s]; appends the events to `events` and,
   /// if given, their noise labels to `noise_labels`.

@@ -79,6 +79,12 @@ class EventSlam2d {
   /// nothing of the call is processed; an empty span is a no-op).
   void process(const Event* events, std::size_t count);
   void process(const EventVector& events) { process(events.data(), events.size()); }
+  /// `count` events of the stream that were left out before process() (a rate cap's thinning,
+  /// EventRateLimiter): noise_aware_diffusion measures the stream's event rate, which they are
+  /// part of. Counted into the current rate window (none before the first process()).
+  void countUnprocessed(std::uint64_t count) {
+    if (rate_window_started_) rate_window_events_ += count;
+  }
 
   /// Expected pose p_* (score-weighted mean of the particles) or the best particle
   /// (config.filter.estimate).

@@ -66,6 +66,12 @@ struct TrackingHealthConfig {
   double warmup_s = 0.5;        ///< [s of event time] always tracking while the map is new
   double min_surface_value = 3.0;
   double sample_interval_s = 0.0005;  ///< [s of event time]
+  /// No event for longer than this [s of event time] (the sensor covered, blinded or
+  /// disconnected): the motion in between is unknown, so the state turns lost and the search
+  /// starts with the first batch after the gap (the fit alone can miss it: events from the
+  /// moved sensor may still meet mapped surfaces). 0 = off. A still sensor in a still scene
+  /// fires no events either; then the first search round finds the unchanged pose.
+  double max_event_gap_s = 0.5;
 };
 
 /// Scoring of events without a depth (thesis 7.2 scores 2D events on the ceiling plane; here the
@@ -130,6 +136,9 @@ struct TrackingHealth {
   double mapped_share = 1.0;
   /// Share of the valid events that had no depth (smoothed over RayScoringConfig::share_time_s).
   double depthless_share = 0.0;
+  /// Gaps in the events longer than TrackingHealthConfig::max_event_gap_s that turned the
+  /// state lost, since the (re)start.
+  std::uint64_t event_gaps = 0;
 };
 
 /// Gyro rotation prior (used once EventSlam3d::addGyro has delivered samples; without them the
@@ -146,7 +155,7 @@ struct Ebslam3dImuConfig {
   /// for the map to correct calibration and model errors.
   double sigma_rotation_per_sqrt_s = 0.1;
   bool estimate_bias = true;
-  double bias_window_s = 0.5;  ///< [s of event time]
+  double bias_window_s = 2.0;  ///< [s of event time] (0.5 s lagged: docs/results/ebslam3d.md)
 };
 
 struct Ebslam3dConfig {
@@ -187,11 +196,6 @@ struct Ebslam3dConfig {
   /// them although it nets no motion. Why: docs/ebslam_core.md#eb-slam-3d-speed
   double motion_window_s = 0.05;  ///< [s of event time]
   double motion_time_s = 0.25;    ///< [s of event time] smoothing of the speeds
-  /// Constant-velocity prediction: before each batch every particle is moved by this share of
-  /// the estimate's velocity (from the same window means: rotation rate in the sensor frame,
-  /// linear velocity in the map frame) times the batch's time span; 0 = a pure random walk
-  /// (the thesis). Why: docs/ebslam_core.md#eb-slam-3d-speed
-  double velocity_prediction = 0.0;
   /// alpha of the score update (alg. 9), per event.
   double score_alpha = 0.05;
   double voxel_size_m = 0.02;  ///< occurrence-map voxel edge [m] (thesis: 1 cm)
@@ -254,8 +258,6 @@ class ParticleSet3D {
   /// particles (0: as many as now). Returns false (and does nothing) when the total score is
   /// zero or not finite.
   bool resampleSystematic(int count = 0);
-  /// Moves every particle: q <- q dq (dq in the sensor frame), position += translation.
-  void predict(const Eigen::Quaternionf& dq, const Eigen::Vector3f& translation);
   /// Replaces every particle by `poses` (at least one), all with score 1 (alg. 9's start).
   void assign(const std::vector<Pose3>& poses);
   /// Indices of the `count` highest scores, best first.
@@ -355,6 +357,8 @@ class EventSlam3d {
   /// is due or its ray crosses no mapped surface (*mapped_share: 0 in that case, 1 otherwise).
   bool fitAtEstimate(int b, double* fit, double* mapped_share);
   void updateHealth(int b, double dt_s);
+  // Into kLost (from kTracking or kRecovering), starting the search when it is enabled.
+  void enterLost();
   void updateKeyframes();
   void reseed();
   void splat(const Eigen::Vector3f& point, const Eigen::Quaternionf& q, const Eigen::Vector3f& t,
@@ -380,8 +384,6 @@ class EventSlam3d {
   std::int64_t motion_window_start_us_ = 0;
   bool motion_window_open_ = false;
   Pose3 motion_prev_mean_;
-  Eigen::Vector3d angular_velocity_ = Eigen::Vector3d::Zero();  // sensor frame [rad/s]
-  Eigen::Vector3d linear_velocity_ = Eigen::Vector3d::Zero();   // map frame [m/s]
   double motion_prev_t_s_ = 0.0;
   bool motion_prev_set_ = false;
   double angular_speed_ = 0.0;
