@@ -121,7 +121,10 @@ int EventParser::decideRegion(std::size_t pos, std::size_t best, std::size_t nex
   // with any one of its inner bytes removed (a garbage byte that landed inside the event).
   // Readings whose time lies between the last published event and the successor are
   // explanations. One: publish it. Several that differ: the garbage may sit inside the event,
-  // so publishing any could invent one; none is published.
+  // so publishing any could invent one; none is published. This is what sparse streams pay
+  // for: a stray byte next to the last time byte gives a reading whose time differs in the low
+  // byte only, which neighbours more than 256 us apart cannot refute (both placements of the
+  // byte are equally likely; publishing the unspliced reading was measured to invent events).
   const std::size_t frame = static_cast<std::size_t>(minEventBytes(config_.format));
   const FrameRef& successor = frames_[next];
   int found = 0;
