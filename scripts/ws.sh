@@ -113,8 +113,11 @@ run_tests() {
       fi
     else
       # catkin package: run_tests writes gtest/rostest XML (a crashed test gets a MISSING-result failure).
+      # Its tests run ${jobs} at a time: each rostest starts its own master on a free port
+      # (rostest_parent.py: Master(port=0)) and writes its own result file.
       local make_status=0
-      make -C "${build_dir}" run_tests </dev/null >"${results}/${name}-run_tests.log" 2>&1 || make_status=$?
+      make -C "${build_dir}" -j "${jobs}" run_tests </dev/null >"${results}/${name}-run_tests.log" 2>&1 ||
+        make_status=$?
       tail -n 40 "${results}/${name}-run_tests.log" | grep -E '^\[ *(OK|FAILED|PASSED|RUN) *\]|FAILURE|ERROR|SUMMARY|Ran ' || true
       if [ -d "${build_dir}/test_results/${name}" ]; then
         mkdir -p "${results}/${name}"

@@ -19,6 +19,9 @@
 #include "ebslam/events/trajectory.h"
 #include "ebslam/simulation/simulator.h"
 #include "ebslam/simulation/simulator_scenes.h"
+#include "ebslam/slam/ceiling_camera.h"
+#include "ebslam/slam/ebpf.h"
+#include "ebslam/slam/grid_map2f.h"
 
 namespace ebslam::tools {
 
@@ -33,8 +36,8 @@ struct Simulated {
 /// Simulates the floor-robot camera path `floor` (camera poses, z up; e.g.
 /// makeFloorRobotTrajectory of a motion-capture run) for its first duration_s [s] (0 = all), or
 /// reads the cached simulation from `dir`. `camera`: the upward camera (any size and lens).
-/// contrast_threshold > 0 replaces the simulator's ON and OFF contrast thresholds (a lower one gives
-/// a denser stream).
+/// contrast_threshold > 0 replaces the simulator's ON and OFF contrast thresholds (a lower one
+/// gives a denser stream).
 inline Simulated simulateFloorRun(const Trajectory& floor, const std::filesystem::path& dir,
                                   double duration_s, std::uint64_t seed, double noise_rate_hz,
                                   const CameraModel& camera = CameraModel{},
@@ -127,6 +130,22 @@ inline Simulated simulateFloorRun(const Trajectory& floor, const std::filesystem
   meta.precision(12);
   meta << s.map.metres_per_pixel << ' ' << s.map.origin_m.x() << ' ' << s.map.origin_m.y() << '\n';
   return s;
+}
+
+/// EB-PF's sensor model cached on a 1 cm grid (2 x 2 means of the 5 mm one, which keeps cell
+/// centres): a quarter of the memory, so the per-event lookups stay in cache.
+inline GridMap2f coarseLikelihood(const CeilingMap& map, const CeilingCamera& camera) {
+  const GridMap2f fine = makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m,
+                                               EbpfConfig{}.gamma * camera.wTrig());
+  GridMap2f coarse(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m, fine.origin_x_m,
+                   fine.origin_y_m);
+  for (int r = 0; r < coarse.height; ++r) {
+    for (int c = 0; c < coarse.width; ++c) {
+      coarse.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
+                                 fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
+    }
+  }
+  return coarse;
 }
 
 }  // namespace ebslam::tools

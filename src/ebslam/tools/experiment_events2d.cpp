@@ -236,22 +236,6 @@ std::vector<fs::path> pioneerTrajectories(const std::string& data_dir, const std
   return files;
 }
 
-// EB-PF's sensor model cached on a 1 cm grid (2 x 2 means of the 5 mm one, which keeps cell
-// centres): a quarter of the memory, so the per-event lookups stay in cache.
-GridMap2f coarseLikelihood(const CeilingMap& map, const CeilingCamera& camera) {
-  const GridMap2f fine = makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m,
-                                               EbpfConfig{}.gamma * camera.wTrig());
-  GridMap2f likelihood(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m, fine.origin_x_m,
-                       fine.origin_y_m);
-  for (int r = 0; r < likelihood.height; ++r) {
-    for (int c = 0; c < likelihood.width; ++c) {
-      likelihood.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
-                                     fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
-    }
-  }
-  return likelihood;
-}
-
 // Runs EB-PF and EB-SLAM-2D on one simulated trajectory and writes a CSV line per run.
 class TrajectoryRuns {
  public:
@@ -264,7 +248,7 @@ class TrajectoryRuns {
         camera_(camera),
         run_duration_(run.ground_truth.back().t_s - run.ground_truth.front().t_s),
         start_(tools::toPose2(run.ground_truth.front())),
-        likelihood_(coarseLikelihood(run.map, camera)) {
+        likelihood_(tools::coarseLikelihood(run.map, camera)) {
     eval_.estimate_time_offset = false;  // simulated events share the ground truth's clock
   }
 

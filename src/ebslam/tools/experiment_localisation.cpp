@@ -309,7 +309,7 @@ class Experiment {
                                    SimulatorConfig{}.events.noise_rate_hz_per_pixel);
     name_ = name;
     camera_.emplace(CameraModel{}, kThesisCeilingHeightM);
-    likelihood_ = likelihood(run_.map, *camera_);
+    likelihood_ = tools::coarseLikelihood(run_.map, *camera_);
     windows_ = makeWindows(run_.events, o_.window_us);
     const double t0 = 1e-6 * static_cast<double>(run_.events.front().t_us);
     const double t1 = 1e-6 * static_cast<double>(run_.events.back().t_us);
@@ -371,21 +371,6 @@ class Experiment {
   }
 
  private:
-  static GridMap2f likelihood(const CeilingMap& map, const CeilingCamera& camera) {
-    // As ebslam_experiment_events2d: the edge likelihood on 1 cm cells.
-    const GridMap2f fine = makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m,
-                                                 EbpfConfig{}.gamma * camera.wTrig());
-    GridMap2f out(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m, fine.origin_x_m,
-                  fine.origin_y_m);
-    for (int r = 0; r < out.height; ++r) {
-      for (int c = 0; c < out.width; ++c) {
-        out.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
-                                fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
-      }
-    }
-    return out;
-  }
-
   EbpfConfig config(int seed, int particles, bool recovery) const {
     EbpfConfig c;
     c.filter.num_particles = particles;

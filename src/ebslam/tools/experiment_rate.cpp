@@ -45,21 +45,6 @@ std::vector<double> parseNumbers(const std::string& text) {
   return out;
 }
 
-// As ebslam_experiment_events2d: EB-PF's edge likelihood on 1 cm cells.
-GridMap2f coarseLikelihood(const CeilingMap& map, const CeilingCamera& camera) {
-  const GridMap2f fine = makeEdgeLikelihoodMap(map.edges, map.metres_per_pixel, map.origin_m,
-                                               EbpfConfig{}.gamma * camera.wTrig());
-  GridMap2f out(fine.width / 2, fine.height / 2, 2.0 * fine.resolution_m, fine.origin_x_m,
-                fine.origin_y_m);
-  for (int r = 0; r < out.height; ++r) {
-    for (int c = 0; c < out.width; ++c) {
-      out.at(c, r) = 0.25f * (fine.at(2 * c, 2 * r) + fine.at(2 * c + 1, 2 * r) +
-                              fine.at(2 * c, 2 * r + 1) + fine.at(2 * c + 1, 2 * r + 1));
-    }
-  }
-  return out;
-}
-
 // EB-PF's position RMSE in the map frame without alignment (as ebslam_experiment_events2d).
 double directRmse(const Trajectory& estimated, const Trajectory& truth) {
   double sum = 0.0;
@@ -147,18 +132,17 @@ int main(int argc, char** argv) {
       name = name.substr(0, name.find("-groundtruth"));
       std::ostringstream folder;
       folder << name << "_c" << contrast;
-      const tools::Simulated run =
-          tools::simulateFloorRun(makeFloorRobotTrajectory(readTumTrajectory(file.string())),
-                                  fs::path(out_dir) / folder.str(), duration_s, 1,
-                                  EventModelConfig{}.noise_rate_hz_per_pixel, CameraModel{},
-                                  contrast);
+      const tools::Simulated run = tools::simulateFloorRun(
+          makeFloorRobotTrajectory(readTumTrajectory(file.string())),
+          fs::path(out_dir) / folder.str(), duration_s, 1,
+          EventModelConfig{}.noise_rate_hz_per_pixel, CameraModel{}, contrast);
       const double run_s = run.ground_truth.back().t_s - run.ground_truth.front().t_s;
       const double mean_rate = static_cast<double>(run.events.size()) / run_s;
       const double peak = peakRate(run.events);
       std::printf("%s: %zu events over %.1f s, mean %.0f events/s, peak %.0f events/s (10 ms)\n",
                   name.c_str(), run.events.size(), run_s, mean_rate, peak);
       const Pose2 start = tools::toPose2(run.ground_truth.front());
-      const GridMap2f likelihood = coarseLikelihood(run.map, camera);
+      const GridMap2f likelihood = tools::coarseLikelihood(run.map, camera);
       TrajectoryEvaluationConfig eval;
       eval.estimate_time_offset = false;
       for (double seed_value : seeds) {
