@@ -49,12 +49,19 @@ function(ros_package_target target)
   endif()
 endfunction()
 
+# A test program itself at -O1 (the nodelets and libraries it tests keep -O2): about a quarter
+# less compile time for the roscpp-heavy test sources, the same results (no fast-math at any level).
+function(ros_package_test_optimisation target)
+  target_compile_options(${target} PRIVATE $<$<NOT:$<CONFIG:Debug>>:-O1>)
+endfunction()
+
 # ros_package_rostest(<name> <file.test> <sources>... [LINK ...] [DEPENDS ...] [DEFINITIONS ...])
 # A rostest whose test node is the gtest program <name> built from <sources>.
 function(ros_package_rostest name test_file)
   cmake_parse_arguments(ARG "" "" "LINK;DEPENDS;DEFINITIONS" ${ARGN})
   add_rostest_gtest(${name} ${test_file} ${ARG_UNPARSED_ARGUMENTS})
   ros_package_target(${name} LINK ${ARG_LINK} DEPENDS ${ARG_DEPENDS} DEFINITIONS ${ARG_DEFINITIONS})
+  ros_package_test_optimisation(${name})
 endfunction()
 
 # ros_package_gtest(<name> <sources>... [LINK ...] [DEPENDS ...] [DEFINITIONS ...])
@@ -64,6 +71,7 @@ function(ros_package_gtest name)
   catkin_add_gtest(${name} ${ARG_UNPARSED_ARGUMENTS})
   ros_package_target(${name} LINK ${ARG_LINK} gtest_main DEPENDS ${ARG_DEPENDS}
     DEFINITIONS ${ARG_DEFINITIONS})
+  ros_package_test_optimisation(${name})
 endfunction()
 
 # nodelet_node(<target> NODELET <package/Class> [NAME <node name>])

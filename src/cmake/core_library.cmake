@@ -116,7 +116,10 @@ macro(core_library_end name prefix)
       add_executable(${name}_tests ${${prefix}_TEST_SOURCES})
       target_link_libraries(${name}_tests PRIVATE ${name}::${name} GTest::gtest GTest::gtest_main
                             ${${prefix}_TEST_LIBS})
-      target_compile_options(${name}_tests PRIVATE ${${prefix}_WARNINGS})
+      # The test programs themselves at -O1 (the libraries they test keep their -O2/-O3): about a
+      # quarter less compile time, the same results (no fast-math at any level).
+      target_compile_options(${name}_tests PRIVATE ${${prefix}_WARNINGS}
+                             $<$<NOT:$<CONFIG:Debug>>:-O1>)
       # Tests may check the library's internal headers under src/ (e.g. dasp's simd.h).
       target_include_directories(${name}_tests PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
       get_filename_component(${prefix}_REPO_ROOT ${CMAKE_CURRENT_SOURCE_DIR}/../.. ABSOLUTE)
