@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "ebslam/events/pose.h"
+#include "path_following.h"
 
 namespace ebslam {
 namespace {
@@ -439,15 +440,8 @@ void CoverageExplorer::decide(double now_s, const Eigen::Vector2d& position) {
 }
 
 VelocityCommand CoverageExplorer::steer(const Pose2& pose, const Eigen::Vector2d& target) const {
-  const Eigen::Vector2d to_target = target - Eigen::Vector2d(pose.x, pose.y);
-  const double error = wrapAngle(std::atan2(to_target.y(), to_target.x()) - pose.theta);
-  VelocityCommand command;
-  command.omega_rps = std::clamp(config_.heading_gain * error, -config_.max_turn_rate_rps,
-                                 config_.max_turn_rate_rps);
-  if (std::abs(error) < config_.turn_in_place_rad) {
-    command.v_mps = config_.max_speed_mps * std::cos(error);
-  }
-  return command;
+  return path_following::steerTowards(pose, target, config_.heading_gain, config_.max_turn_rate_rps,
+                                      config_.turn_in_place_rad, config_.max_speed_mps);
 }
 
 VelocityCommand CoverageExplorer::sweep(double now_s, const Pose2& pose) {
@@ -474,14 +468,7 @@ VelocityCommand CoverageExplorer::sweep(double now_s, const Pose2& pose) {
 VelocityCommand CoverageExplorer::follow(double now_s, const Pose2& pose) {
   const Eigen::Vector2d position(pose.x, pose.y);
   const auto distance = [&](std::size_t j) { return (path_[j] - position).norm(); };
-  if (next_waypoint_ < path_.size()) {
-    std::size_t nearest = next_waypoint_;
-    const std::size_t last = std::min(path_.size(), next_waypoint_ + 6);
-    for (std::size_t j = next_waypoint_ + 1; j < last; ++j) {
-      if (distance(j) < distance(nearest)) nearest = j;
-    }
-    next_waypoint_ = nearest;
-  }
+  next_waypoint_ = path_following::nearestAhead(next_waypoint_, path_.size(), 6, distance);
   while (next_waypoint_ < path_.size() &&
          (next_waypoint_ + 1 < path_.size()
               ? distance(next_waypoint_) < config_.lookahead_m * 0.5
@@ -520,12 +507,8 @@ VelocityCommand CoverageExplorer::follow(double now_s, const Pose2& pose) {
     need_decision_ = true;
     return {};
   }
-  std::size_t target = next_waypoint_;
-  for (std::size_t j = next_waypoint_ + 1; j < path_.size(); ++j) {
-    if (distance(j) > config_.lookahead_m) break;
-    target = j;
-  }
-  return steer(pose, path_[target]);
+  return steer(pose, path_[path_following::lookaheadTarget(next_waypoint_, path_.size(),
+                                                           config_.lookahead_m, distance)]);
 }
 
 VelocityCommand CoverageExplorer::update(double now_s, const std::optional<Pose2>& pose,

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "ebslam/events/pose.h"
+#include "path_following.h"
 
 namespace ebslam {
 namespace {
@@ -499,19 +500,8 @@ VelocityCommand Explorer::follow(const Pose2& pose) {
   const auto distance = [&](std::size_t j) {
     return (planner_.grid().centre(path_[j]) - position).norm();
   };
-  // Progress along the path: skip to the nearest of the next few cells (steering at the
-  // look-ahead point passes cells without touching their centres).
-  if (next_waypoint_ < path_.size()) {
-    std::size_t nearest = next_waypoint_;
-    const std::size_t last = std::min(path_.size(), next_waypoint_ + 4);
-    for (std::size_t j = next_waypoint_ + 1; j < last; ++j) {
-      if (distance(j) < distance(nearest)) nearest = j;
-    }
-    next_waypoint_ = nearest;
-  }
-  while (next_waypoint_ < path_.size() &&
-         (planner_.grid().centre(path_[next_waypoint_]) - position).norm() <
-             config_.waypoint_tolerance_m) {
+  next_waypoint_ = path_following::nearestAhead(next_waypoint_, path_.size(), 4, distance);
+  while (next_waypoint_ < path_.size() && distance(next_waypoint_) < config_.waypoint_tolerance_m) {
     ++next_waypoint_;
   }
   if (next_waypoint_ >= path_.size()) {
@@ -520,20 +510,11 @@ VelocityCommand Explorer::follow(const Pose2& pose) {
   }
   // Pure pursuit over the cells: steer at the farthest upcoming cell within the look-ahead
   // distance, so that the 60-degree zig-zags of a hex path become one smooth line.
-  std::size_t target = next_waypoint_;
-  for (std::size_t j = next_waypoint_ + 1; j < path_.size(); ++j) {
-    if ((planner_.grid().centre(path_[j]) - position).norm() > config_.lookahead_m) break;
-    target = j;
-  }
-  const Eigen::Vector2d to_target = planner_.grid().centre(path_[target]) - position;
-  const double error = wrapAngle(std::atan2(to_target.y(), to_target.x()) - pose.theta);
-  VelocityCommand command;
-  command.omega_rps = std::clamp(config_.heading_gain * error, -config_.max_turn_rate_rps,
-                                 config_.max_turn_rate_rps);
-  if (std::abs(error) < config_.turn_in_place_rad) {
-    command.v_mps = config_.max_speed_mps * std::cos(error);
-  }
-  return command;
+  const std::size_t target =
+      path_following::lookaheadTarget(next_waypoint_, path_.size(), config_.lookahead_m, distance);
+  return path_following::steerTowards(pose, planner_.grid().centre(path_[target]),
+                                      config_.heading_gain, config_.max_turn_rate_rps,
+                                      config_.turn_in_place_rad, config_.max_speed_mps);
 }
 
 VelocityCommand Explorer::update(double now_s, const std::optional<Pose2>& pose,
