@@ -9,22 +9,13 @@
 # (defaults 10000000 20 (the node's default cap: empty) evt3). Needs the built workspace (.ws);
 # starts its own ROS master on a free port.
 set -eo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 rate=${1:-10000000}
 duration=${2:-20}
 cap=${3:-}
 encoding=${4:-evt3}
-source "${repo}/scripts/ros_env.sh"
-set +u
-source "${WS_DIR:-${repo}/.ws}/devel/setup.bash"
-export ROS_HOSTNAME=localhost
-port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI=http://localhost:${port}
-roscore -p "${port}" >/dev/null 2>&1 &
-core=$!
+source "$(dirname "${BASH_SOURCE[0]}")/private_master.sh"
 pids=()
-trap 'for p in "${pids[@]}"; do kill "${p}" 2>/dev/null || true; done; kill ${core} 2>/dev/null || true' EXIT
-for _ in $(seq 50); do rostopic list >/dev/null 2>&1 && break; sleep 0.2; done
+trap 'for p in "${pids[@]}"; do kill "${p}" 2>/dev/null || true; done; kill ${ros_master_pid} 2>/dev/null || true' EXIT
 
 # The camera of the source: 1280x720, f = 800 px, 2.59 m under the ceiling (3.2 mm per pixel);
 # map cells of 4 pixels (1.3 cm) over 12 m.

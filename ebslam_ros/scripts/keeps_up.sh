@@ -4,20 +4,11 @@
 #   ebslam_ros/scripts/keeps_up.sh EVENTS_FILE [DURATION] [N]
 # Needs the built workspace (.ws) and its own ROS master (started here on a free port).
 set -eo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 events=${1:?event file}
 duration=${2:-60}
 particles=${3:-25}
-source "${repo}/scripts/ros_env.sh"
-set +u
-source "${WS_DIR:-${repo}/.ws}/devel/setup.bash"
-export ROS_HOSTNAME=localhost
-port=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.getsockname()[1])')
-export ROS_MASTER_URI=http://localhost:${port}
-roscore -p "${port}" >/dev/null 2>&1 &
-core=$!
-trap 'kill ${filter} ${core} 2>/dev/null || true' EXIT
-sleep 3
+source "$(dirname "${BASH_SOURCE[0]}")/private_master.sh"
+trap 'kill ${filter} ${ros_master_pid} 2>/dev/null || true' EXIT
 for rate in 200000 600000; do
   rosrun ebslam_ros event_slam2d_node _num_particles:="${particles}" _queue_size:=100000 \
     __name:=slam >/dev/null 2>&1 &
