@@ -88,10 +88,30 @@ TEST(CoverageMap, NearestOpenLaneSampleAndDoneInASealedBox) {
     for (double x = -0.5; x <= 0.5 + 1e-9; x += 0.02) map.addVisit({x, y});
   }
   EXPECT_TRUE(map.pathToNearestOpen({0.0, 0.0}).empty());
+  EXPECT_TRUE(map.pathToNearestOpen({0.0, 0.0}, true).empty());  // contacts seal it
   const CoverageMap::Census after = map.census({0.0, 0.0});
   EXPECT_EQ(after.open_reachable, 0);
   EXPECT_GT(after.visited, 20);
   EXPECT_GT(map.sweptArea(), 1.2);  // 1 m x 1 m of centres plus the body's reach
+}
+
+// office seed 2 (EB-SLAM in the loop) said "done" at 20 s with 7 % covered: given-up goals and wall
+// hypotheses had closed a pocket around the robot. Before "done" only contacts may stop it.
+TEST(CoverageMap, GivenUpCellsAroundTheRobotYieldBeforeDone) {
+  CoverageConfig config;
+  config.grid_extent_m = 3.0;
+  CoverageMap map(config, {0.0, 0.0});
+  map.addVisit({0.0, 0.0});
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * kPi / 4.0;
+    map.abandon({0.25 * std::cos(a), 0.25 * std::sin(a)}, 0.12);
+  }
+  EXPECT_TRUE(map.pathToNearestOpen({0.0, 0.0}).empty());
+  EXPECT_EQ(map.census({0.0, 0.0}).open_reachable, 0);
+  const std::vector<int> escape = map.pathToNearestOpen({0.0, 0.0}, true);
+  ASSERT_FALSE(escape.empty());
+  EXPECT_TRUE(map.open(escape.back()));
+  EXPECT_GT((map.centre(escape.back()) - Eigen::Vector2d(0.0, 0.0)).norm(), 0.3);
 }
 
 TEST(CoverageExplorer, StopsWithoutAPoseAndBacksOutOfABump) {

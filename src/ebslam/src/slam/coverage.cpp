@@ -192,8 +192,11 @@ void CoverageMap::updateClearance() {
   }
 }
 
-std::vector<int> CoverageMap::dijkstra(int start, int goal) {
+std::vector<int> CoverageMap::dijkstra(int start, int goal, bool contacts_only) {
   updateClearance();
+  const auto passable = [&](int cell) {
+    return contacts_only ? hard_[cell] == 0 : traversable(cell);
+  };
   const auto n = static_cast<std::size_t>(size());
   cost_.assign(n, kFar);
   parent_.assign(n, -1);
@@ -218,9 +221,9 @@ std::vector<int> CoverageMap::dijkstra(int start, int goal) {
       const int c = c0 + dc[k], r = r0 + dr[k];
       if (!inside(c, r)) continue;
       const int next = index(c, r);
-      if (!traversable(next) && next != goal) continue;
+      if (!passable(next) && next != goal) continue;
       // No corner cutting between two blocked cells.
-      if (k >= 4 && (!traversable(index(c, r0)) || !traversable(index(c0, r)))) continue;
+      if (k >= 4 && (!passable(index(c, r0)) || !passable(index(c0, r)))) continue;
       const float step = (k < 4 ? 1.0f : diagonal) +
                          (near_blocked_[next] ? static_cast<float>(config_.clearance_cost) : 0.0f);
       if (cost + step < cost_[next]) {
@@ -237,10 +240,10 @@ std::vector<int> CoverageMap::dijkstra(int start, int goal) {
   return path;
 }
 
-std::vector<int> CoverageMap::pathToNearestOpen(const Eigen::Vector2d& from) {
+std::vector<int> CoverageMap::pathToNearestOpen(const Eigen::Vector2d& from, bool contacts_only) {
   const std::optional<int> start = cellAt(from);
   if (!start) return {};
-  return dijkstra(*start, -1);
+  return dijkstra(*start, -1, contacts_only);
 }
 
 std::vector<int> CoverageMap::pathTo(const Eigen::Vector2d& from, const Eigen::Vector2d& goal) {
@@ -248,7 +251,7 @@ std::vector<int> CoverageMap::pathTo(const Eigen::Vector2d& from, const Eigen::V
   const std::optional<int> target = cellAt(goal);
   if (!start || !target) return {};
   if (*start == *target) return {*target};
-  return dijkstra(*start, *target);
+  return dijkstra(*start, *target, false);
 }
 
 CoverageMap::Census CoverageMap::census(const Eigen::Vector2d& from) {
@@ -419,6 +422,11 @@ void CoverageExplorer::decide(double now_s, const Eigen::Vector2d& position) {
   }
   // 3. The nearest unswept reachable lane sample.
   std::vector<int> cells = map_.pathToNearestOpen(position);
+  if (cells.empty()) {
+    // Hypothesised walls and given-up goals can close a pocket around the robot (two bumps
+    // close together, a pose error): before "done", they yield; only contacts stop the search.
+    cells = map_.pathToNearestOpen(position, true);
+  }
   if (!cells.empty()) {
     sweep_after_transit_row_ = map_.row(cells.back());
     sweep_after_transit_direction_ = lane_direction_;

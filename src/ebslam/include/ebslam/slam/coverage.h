@@ -121,8 +121,9 @@ class CoverageMap {
   bool open(int cell) const;
 
   /// Shortest path (8-connected, clearance cost) from `from` to the nearest open lane sample;
-  /// empty if none is reachable. Cells from the start's successor to the goal.
-  std::vector<int> pathToNearestOpen(const Eigen::Vector2d& from);
+  /// empty if none is reachable. Cells from the start's successor to the goal. contacts_only:
+  /// the path may cross wall hypotheses and given-up cells (only contacts block it).
+  std::vector<int> pathToNearestOpen(const Eigen::Vector2d& from, bool contacts_only = false);
   /// Shortest path from `from` to `goal`'s cell; empty if unreachable.
   std::vector<int> pathTo(const Eigen::Vector2d& from, const Eigen::Vector2d& goal);
   /// Open lane samples reachable from `from`, visited lane samples and abandoned ones.
@@ -140,7 +141,7 @@ class CoverageMap {
   const std::vector<Eigen::Vector2d>& contacts() const { return contacts_; }
 
  private:
-  std::vector<int> dijkstra(int start, int goal);  // goal < 0: nearest open
+  std::vector<int> dijkstra(int start, int goal, bool contacts_only);  // goal < 0: nearest open
   void updateClearance();
 
   CoverageConfig config_;
