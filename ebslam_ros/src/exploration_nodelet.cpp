@@ -1,5 +1,7 @@
-// Autonomous exploration (thesis 7.4) as a nodelet: ebslam::Explorer (exploration.h) driven by
-// EB-SLAM's pose, its normalisation map and the bump ring. Topics (relative names):
+// Autonomous exploration (thesis 7.4) as a nodelet: ebslam::Explorer (exploration.h, ~planner
+// gain) or ebslam::CoverageExplorer (coverage.h, ~planner coverage: lanes on a grid learned from
+// bumps) driven by EB-SLAM's pose, its normalisation map (gain only) and the bump ring. Topics
+// (relative names):
 //  - pose (geometry_msgs/PoseWithCovarianceStamped, in), base_link in ~map_frame as EventSlam2d
 //    publishes it; the first pose centres the hex grid (or ~initial_pose, when set, from the first
 //    control step until the first pose: the localisation's start, as ebslam_explore starts);
@@ -15,7 +17,11 @@
 //  - grid_markers (visualization_msgs/MarkerArray, out, only while subscribed, every
 //    ~markers_period): the hex grid as cubes coloured by Z, E and the gain (namespaces
 //    "localisation_Z", "obstacle_E", "gain"; blue = low, red = high, cells with a value only),
-//    "blocked" cells (near black) and "bumps" (contact points, orange).
+//    "blocked" cells (near black) and "bumps" (contact points, orange); coverage planner: grid
+//    cells "swept" (light red), "blocked" (near black), "open" (lane samples still to sweep:
+//    the frontier, green), the "lanes" driven (lines) and "bumps";
+//  - done (std_msgs/Bool, out, latched): false until the coverage planner finds nothing reachable
+//    left unswept, then true (it then returns to the start and stops); always false for gain.
 // Bad input (logged throttled on wall time, counted in diagnostics): no pose for ~pose_timeout
 // (zero cmd_vel, state no_pose), a pose jumping (the plan is dropped and made anew), bumps on
 // every side or too many in a row (state stuck, zero cmd_vel, retried after 2 s), poses in
@@ -30,8 +36,10 @@
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <std_msgs/Bool.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <ebslam/slam/coverage.h>
 #include <ebslam/slam/exploration.h>
 
 #include <algorithm>
@@ -62,9 +70,12 @@ class ExplorationNodelet : public nodelet::Nodelet {
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 10);
     plan_pub_ = nh.advertise<nav_msgs::Path>("plan", 1, true);
     markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("grid_markers", 1);
+    done_pub_ = nh.advertise<std_msgs::Bool>("done", 1, true);
+    std_msgs::Bool done;
+    done_pub_.publish(done);
     pose_sub_ = nh.subscribe("pose", 10, &ExplorationNodelet::onPose, this);
     bump_sub_ = nh.subscribe("bump", 100, &ExplorationNodelet::onBump, this);
-    if (config_.use_localisation_map) {
+    if (config_.use_localisation_map && !config_.coverage_planner) {
       z_sub_ = nh.subscribe("map/normalisation", 1, &ExplorationNodelet::onNormalisation, this);
     }
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, getPrivateNodeHandle());
@@ -78,10 +89,18 @@ class ExplorationNodelet : public nodelet::Nodelet {
     control_timer_ = nh.createTimer(ros::Duration(1.0 / config_.control_rate_hz),
                                     &ExplorationNodelet::onControl, this);
     start_time_ = ros::Time::now();
-    NODELET_INFO("exploring on a %.2f m hex grid of %.1f m, at most %.2f m/s, %.0f Hz control%s",
-                 config_.exploration.hex_spacing_m, config_.exploration.grid_extent_m,
-                 config_.exploration.max_speed_mps, config_.control_rate_hz,
-                 config_.use_localisation_map ? "" : " (no localisation map Z)");
+    if (config_.coverage_planner) {
+      NODELET_INFO(
+          "covering in lanes %.2f m apart on a %.2f m grid of %.1f m, at most %.2f m/s, "
+          "%.0f Hz control",
+          config_.coverage.lane_spacing_m, config_.coverage.cell_m, config_.coverage.grid_extent_m,
+          config_.coverage.max_speed_mps, config_.control_rate_hz);
+    } else {
+      NODELET_INFO("exploring on a %.2f m hex grid of %.1f m, at most %.2f m/s, %.0f Hz control%s",
+                   config_.exploration.hex_spacing_m, config_.exploration.grid_extent_m,
+                   config_.exploration.max_speed_mps, config_.control_rate_hz,
+                   config_.use_localisation_map ? "" : " (no localisation map Z)");
+    }
   }
 
   // Yaw [rad] of a quaternion about z (NaN for a zero quaternion).
@@ -175,10 +194,19 @@ class ExplorationNodelet : public nodelet::Nodelet {
     if (!pending_pose_ && !pose_seen_ && config_.initial_pose) {
       pending_pose_ = config_.initial_pose;  // the localisation's start, until its first pose
     }
-    if (!explorer_ && pending_pose_ && std::isfinite(pending_pose_->x) &&
+    if (!started() && pending_pose_ && std::isfinite(pending_pose_->x) &&
         std::isfinite(pending_pose_->y)) {
       try {
-        explorer_.emplace(config_.exploration, Eigen::Vector2d(pending_pose_->x, pending_pose_->y));
+        if (config_.coverage_planner) {
+          // The start is where the robot returns; its heading does not matter.
+          const ebslam::Pose2 start{
+              pending_pose_->x, pending_pose_->y,
+              std::isfinite(pending_pose_->theta) ? pending_pose_->theta : 0.0};
+          coverer_.emplace(config_.coverage, start);
+        } else {
+          explorer_.emplace(config_.exploration,
+                            Eigen::Vector2d(pending_pose_->x, pending_pose_->y));
+        }
         NODELET_INFO("%s (%.2f, %.2f) m: the exploration grid is centred there",
                      pose_seen_ ? "first pose" : "~initial_pose", pending_pose_->x,
                      pending_pose_->y);
@@ -187,7 +215,7 @@ class ExplorationNodelet : public nodelet::Nodelet {
       }
     }
     geometry_msgs::Twist cmd;
-    if (!explorer_) {
+    if (!started()) {
       if ((now - start_time_).toSec() > config_.exploration.pose_timeout_s && due(nopose_warned_)) {
         NODELET_WARN("no pose received yet on %s: standing still", pose_sub_.getTopic().c_str());
       }
@@ -199,20 +227,66 @@ class ExplorationNodelet : public nodelet::Nodelet {
       last_pose_ = pending_pose_;
     }
     const ebslam::VelocityCommand command =
-        explorer_->update(now.toSec(), pending_pose_, pending_bump_, z_ ? &*z_ : nullptr);
+        coverer_
+            ? coverer_->update(now.toSec(), pending_pose_, pending_bump_)
+            : explorer_->update(now.toSec(), pending_pose_, pending_bump_, z_ ? &*z_ : nullptr);
     pending_pose_.reset();
     pending_bump_ = ebslam::BumpReading{};
     cmd.linear.x = command.v_mps;
     cmd.angular.z = command.omega_rps;
     cmd_pub_.publish(cmd);
-    report();
-    publishPlan();
+    if (coverer_) {
+      reportCoverage();
+      publishPath(coverer_->path());
+    } else {
+      report();
+      publishPlan();
+    }
     if (markers_pub_.getNumSubscribers() > 0 &&
         (last_markers_.isZero() ||
          (ros::WallTime::now() - last_markers_).toSec() >= config_.markers_period_s)) {
       last_markers_ = ros::WallTime::now();
-      publishMarkers();
+      if (coverer_) {
+        publishCoverageMarkers();
+      } else {
+        publishMarkers();
+      }
     }
+  }
+
+  bool started() const { return explorer_ || coverer_; }
+
+  // The coverage planner's state changes and messages, and "done" once.
+  void reportCoverage() {
+    const ebslam::CoverageState state = coverer_->state();
+    if (coverer_->done() && !done_published_) {
+      done_published_ = true;
+      std_msgs::Bool done;
+      done.data = true;
+      done_pub_.publish(done);
+      NODELET_INFO("done: %.1f %% of the reachable lane samples swept",
+                   100.0 * coverer_->coveredShare());
+    }
+    if (state == last_coverage_state_ && coverer_->message() == last_message_) return;
+    const bool changed = state != last_coverage_state_;
+    last_coverage_state_ = state;
+    last_message_ = coverer_->message();
+    const char* name = ebslam::toString(state);
+    const std::string text =
+        last_message_.empty() ? name : std::string(name) + ": " + last_message_;
+    if (state == ebslam::CoverageState::kNoPose) {
+      ++bad_input_seen_;
+      if (due(nopose_warned_) || changed) NODELET_WARN("%s", text.c_str());
+    } else if (changed) {
+      NODELET_INFO("%s", text.c_str());
+    }
+  }
+
+  // The coverage planner's path still to drive, sent when it changed.
+  void publishPath(const std::vector<Eigen::Vector2d>& points) {
+    if (points == coverage_path_) return;
+    coverage_path_ = points;
+    sendPath(points);
   }
 
   // Logs state changes and pose jumps (the explorer's own words).
@@ -257,6 +331,11 @@ class ExplorationNodelet : public nodelet::Nodelet {
     if (explorer_->replans() == plan_replans_ && points.size() == plan_size_) return;
     plan_replans_ = explorer_->replans();
     plan_size_ = points.size();
+    sendPath(points);
+  }
+
+  // points from the robot's position on, each pose facing the next, in ~map_frame.
+  void sendPath(const std::vector<Eigen::Vector2d>& points) {
     nav_msgs::Path path;
     path.header.stamp = pose_stamp_;
     path.header.frame_id = config_.map_frame;
@@ -376,9 +455,97 @@ class ExplorationNodelet : public nodelet::Nodelet {
     markers_pub_.publish(array);
   }
 
+  void publishCoverageMarkers() {
+    const ebslam::CoverageMap& map = coverer_->map();
+    const double robot_radius = config_.coverage.robot_radius_m;
+    visualization_msgs::MarkerArray array;
+    visualization_msgs::Marker base;
+    base.header.stamp = pose_stamp_;
+    base.header.frame_id = config_.map_frame;
+    base.pose.orientation.w = 1.0;
+    const auto point = [](const Eigen::Vector2d& v) {
+      geometry_msgs::Point p;
+      p.x = v.x();
+      p.y = v.y();
+      return p;
+    };
+    // Grid cells for which `pick` holds, as one cube list.
+    const auto cells = [&](const std::string& ns, double z, float r, float g, float b,
+                           const auto& pick) {
+      visualization_msgs::Marker m = base;
+      m.ns = ns;
+      m.type = visualization_msgs::Marker::CUBE_LIST;
+      m.scale.x = m.scale.y = config_.coverage.cell_m;
+      m.scale.z = 0.01;
+      m.pose.position.z = z;
+      m.color.r = r;
+      m.color.g = g;
+      m.color.b = b;
+      m.color.a = 0.8f;
+      for (int cell = 0; cell < map.size(); ++cell) {
+        if (pick(cell)) m.points.push_back(point(map.centre(cell)));
+      }
+      if (m.points.empty()) m.action = visualization_msgs::Marker::DELETE;
+      array.markers.push_back(m);
+    };
+    cells("swept", 0.0, 1.0f, 0.7f, 0.7f,
+          [&](int cell) { return map.visitDistance(cell) <= robot_radius; });
+    cells("blocked", 0.01, 0.1f, 0.1f, 0.1f,
+          [&](int cell) { return map.hardBlocked()[cell] != 0 || map.softBlocked()[cell] != 0; });
+    cells("open", 0.02, 0.1f, 0.8f, 0.1f, [&](int cell) { return map.open(cell); });
+    visualization_msgs::Marker lanes = base;
+    lanes.ns = "lanes";
+    lanes.type = visualization_msgs::Marker::LINE_LIST;
+    lanes.scale.x = 0.02;
+    lanes.pose.position.z = 0.03;
+    lanes.color.b = 1.0f;
+    lanes.color.a = 1.0f;
+    for (const auto& [from, to] : coverer_->lanes()) {
+      lanes.points.push_back(point(from));
+      lanes.points.push_back(point(to));
+    }
+    if (lanes.points.empty()) lanes.action = visualization_msgs::Marker::DELETE;
+    array.markers.push_back(lanes);
+    visualization_msgs::Marker bumps = base;
+    bumps.ns = "bumps";
+    bumps.type = visualization_msgs::Marker::SPHERE_LIST;
+    bumps.scale.x = bumps.scale.y = bumps.scale.z = 0.05;
+    bumps.pose.position.z = 0.05;
+    bumps.color.r = 1.0f;
+    bumps.color.g = 0.5f;
+    bumps.color.a = 1.0f;
+    for (const Eigen::Vector2d& b : map.contacts()) bumps.points.push_back(point(b));
+    if (bumps.points.empty()) bumps.action = visualization_msgs::Marker::DELETE;
+    array.markers.push_back(bumps);
+    markers_pub_.publish(array);
+  }
+
+  void diagnoseCoverage(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    using diagnostic_msgs::DiagnosticStatus;
+    const ebslam::CoverageState state = coverer_->state();
+    if (state == ebslam::CoverageState::kNoPose) {
+      status.summary(DiagnosticStatus::WARN,
+                     std::string(ebslam::toString(state)) + ": " + coverer_->message());
+    } else if (bad_input_seen_ > bad_input_reported_) {
+      status.summary(DiagnosticStatus::WARN, "bad input since the last report (see the log)");
+    } else {
+      status.summary(DiagnosticStatus::OK, ebslam::toString(state));
+    }
+    status.add("done", coverer_->done());
+    status.add("done at [s, ROS time]", coverer_->doneTime());
+    status.add("covered share of the lane samples", coverer_->coveredShare());
+    status.add("swept area [m^2]", coverer_->map().sweptArea());
+    status.add("lanes", coverer_->lanes().size());
+    status.add("bumps", coverer_->bumps());
+    status.add("goals given up", coverer_->goalsAbandoned());
+    status.add("planned points left", coverer_->path().size());
+  }
+
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
     using diagnostic_msgs::DiagnosticStatus;
-    if (!explorer_) {
+    if (coverer_) {
+      diagnoseCoverage(status);
+    } else if (!explorer_) {
       status.summary(DiagnosticStatus::WARN, "waiting for the first pose");
     } else if (explorer_->state() == ebslam::ExplorationState::kNoPose ||
                explorer_->state() == ebslam::ExplorationState::kStuck) {
@@ -390,8 +557,14 @@ class ExplorationNodelet : public nodelet::Nodelet {
       status.summary(DiagnosticStatus::OK, ebslam::toString(explorer_->state()));
     }
     bad_input_reported_ = bad_input_seen_;
-    status.add("state", explorer_ ? ebslam::toString(explorer_->state()) : "waiting");
-    status.add("message", explorer_ ? explorer_->message() : std::string());
+    status.add("planner", config_.coverage_planner ? "coverage" : "gain");
+    if (coverer_) {
+      status.add("state", ebslam::toString(coverer_->state()));
+      status.add("message", coverer_->message());
+    } else {
+      status.add("state", explorer_ ? ebslam::toString(explorer_->state()) : "waiting");
+      status.add("message", explorer_ ? explorer_->message() : std::string());
+    }
     status.add("poses received", poses_);
     status.add("poses in a wrong frame", wrong_frame_);
     status.add("bump readings", bump_messages_);
@@ -416,7 +589,11 @@ class ExplorationNodelet : public nodelet::Nodelet {
 
   ExplorationNodeConfig config_;
   std::mutex mutex_;
-  std::optional<ebslam::Explorer> explorer_;  // from the first pose
+  std::optional<ebslam::Explorer> explorer_;         // from the first pose (~planner gain)
+  std::optional<ebslam::CoverageExplorer> coverer_;  // from the first pose (~planner coverage)
+  ebslam::CoverageState last_coverage_state_ = ebslam::CoverageState::kTransit;
+  std::vector<Eigen::Vector2d> coverage_path_;
+  bool done_published_ = false;
   std::optional<ebslam::Pose2> pending_pose_, last_pose_;
   bool pose_seen_ = false;  // a pose arrived (~initial_pose is used until then)
   ros::Time pose_stamp_;
@@ -427,7 +604,7 @@ class ExplorationNodelet : public nodelet::Nodelet {
   std::string last_message_;
   std::size_t pose_jumps_ = 0, plan_replans_ = 0, plan_size_ = 0;
   ros::Subscriber pose_sub_, bump_sub_, z_sub_;
-  ros::Publisher cmd_pub_, plan_pub_, markers_pub_;
+  ros::Publisher cmd_pub_, plan_pub_, markers_pub_, done_pub_;
   ros::Timer control_timer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;

@@ -1,6 +1,7 @@
 #include "exploration_params.h"
 
 #include <array>
+#include <string>
 
 #include <ebslam_ros_common/ros_param_helpers.h>
 
@@ -45,6 +46,47 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
   e.pose_jump_m = param<double>(nh, "pose_jump", e.pose_jump_m);
   e.pose_jump_rad = param<double>(nh, "pose_jump_rad", e.pose_jump_rad);
   validateCore(nh, e);
+  const std::string planner = param<std::string>(nh, "planner", "gain");
+  if (planner != "gain" && planner != "coverage") {
+    fail(nh, "planner", "must be gain or coverage, not '" + planner + "'");
+  }
+  c.coverage_planner = planner == "coverage";
+  ebslam::CoverageConfig& v = c.coverage;
+  const auto real = [&](const char* name, double& value) {
+    value = param<double>(nh, std::string("coverage/") + name, value);
+  };
+  const auto integer = [&](const char* name, int& value) {
+    value = param<int>(nh, std::string("coverage/") + name, value);
+  };
+  real("cell", v.cell_m);
+  real("grid_extent", v.grid_extent_m);
+  real("robot_radius", v.robot_radius_m);
+  real("lane_spacing", v.lane_spacing_m);
+  real("lane_direction", v.lane_direction_rad);
+  real("contact_block_radius", v.contact_block_radius_m);
+  real("wall_half_length", v.wall_half_length_m);
+  real("wall_depth", v.wall_depth_m);
+  real("clearance_cost", v.clearance_cost);
+  integer("clearance_cells", v.clearance_cells);
+  real("max_speed", v.max_speed_mps);
+  real("max_turn_rate", v.max_turn_rate_rps);
+  real("heading_gain", v.heading_gain);
+  real("turn_in_place", v.turn_in_place_rad);
+  real("lookahead", v.lookahead_m);
+  real("waypoint_tolerance", v.waypoint_tolerance_m);
+  real("backout_time", v.backout_time_s);
+  real("backout_speed", v.backout_speed_mps);
+  real("side_bump_skip", v.side_bump_skip_m);
+  integer("repeat_bumps", v.repeat_bumps);
+  real("repeat_bump_radius", v.repeat_bump_radius_m);
+  real("repeat_bump_window", v.repeat_bump_window_s);
+  integer("max_bumps_per_goal", v.max_bumps_per_goal);
+  real("progress", v.progress_m);
+  real("progress_timeout", v.progress_timeout_s);
+  real("pose_timeout", v.pose_timeout_s);
+  v.return_to_start = param<bool>(nh, "coverage/return_to_start", v.return_to_start);
+  real("start_tolerance", v.start_tolerance_m);
+  validateCore(nh, v);
   c.control_rate_hz = param<double>(nh, "control_rate", c.control_rate_hz);
   requirePositive(c.control_rate_hz, nh, "control_rate");
   if (c.control_rate_hz > 1000.0) fail(nh, "control_rate", "must be at most 1000 Hz");

@@ -5,12 +5,14 @@
 // the robot's true disc (CoverageRaster, 2 cm cells) and EB-SLAM's position error, aligned RMSE
 // (evaluateTrajectory, no time offset, 0.1 s association gap) and raw RMSE, associated by
 // header.stamp (estimate = /ebslam/pose in map, ground truth = /ground_truth/pose in map).
-// Asserts both within the range of the offline runs (parameters ~min_covered, ~max_rmse). With
+// Asserts both within the range of the offline runs (parameters ~min_covered, ~max_rmse) and, with
+// ~expect_done 0 or 1, the explorer's latched /exploration/done at the end. With
 // ~output set, also writes the figures as one CSV line there (used for docs/results).
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <std_msgs/Bool.h>
 
 #include <ebslam/events/trajectory.h>
 #include <ebslam/events/trajectory_evaluation.h>
@@ -35,6 +37,7 @@ TEST(ExplorationLoop, CoverageAndLocalisationAsOffline) {
   std::string plan_path, output;
   double duration_s = 120.0, min_covered = 0.0, max_rmse_m = 1.0, robot_radius_m = 0.15;
   double wall_limit_s = 600.0;
+  int expect_done = -1;
   ASSERT_TRUE(pnh.getParam("floor_plan", plan_path));
   pnh.getParam("duration", duration_s);
   pnh.getParam("min_covered", min_covered);
@@ -42,6 +45,7 @@ TEST(ExplorationLoop, CoverageAndLocalisationAsOffline) {
   pnh.getParam("robot_radius", robot_radius_m);
   pnh.getParam("wall_limit", wall_limit_s);
   pnh.getParam("output", output);
+  pnh.getParam("expect_done", expect_done);
   const ebslam::FloorPlan plan = ebslam::readFloorPlan(plan_path, robot_radius_m);
   ebslam::CoverageRaster coverage(plan, robot_radius_m, 0.02);
   // ~map_frame of the simulator lies at plan.start: map -> room.
@@ -69,6 +73,9 @@ TEST(ExplorationLoop, CoverageAndLocalisationAsOffline) {
         push(estimate, ebslam::se2ToFloorPose(m->header.stamp.toSec(), p.position.x, p.position.y,
                                               yawOf(p.orientation)));
       });
+  int done = -1;  // nothing received yet
+  ros::Subscriber done_sub = nh.subscribe<std_msgs::Bool>(
+      "/exploration/done", 10, [&](const std_msgs::Bool::ConstPtr& m) { done = m->data ? 1 : 0; });
   const ros::WallTime wall_start = ros::WallTime::now();
   const ros::WallTime wall_end = wall_start + ros::WallDuration(wall_limit_s);
   while (ros::ok() && ros::WallTime::now() < wall_end &&
@@ -116,6 +123,9 @@ TEST(ExplorationLoop, CoverageAndLocalisationAsOffline) {
   }
   EXPECT_GE(covered, min_covered);
   EXPECT_LE(rmse_aligned, max_rmse_m);
+  if (expect_done >= 0) {
+    EXPECT_EQ(done, expect_done) << "latched /exploration/done (-1: none)";
+  }
 }
 
 }  // namespace
