@@ -6,7 +6,9 @@
 // at a fixed event rate on the wall clock. Events lie on the ceiling's edges in view (what an
 // edge-driven sensor sees, and what EB-SLAM-2D's model expects), polarity from the edge's normal
 // against the motion, plus --noise-share of uniformly random background events. Seeded: the
-// same options give the same events.
+// same options give the same events. By default every packet is rendered before the first is
+// published (--prerender 1; about 4 bytes per event in memory), so that on a machine with few
+// cores the source's rendering does not limit the rate it publishes at.
 //
 // While publishing it measures, and prints at the end:
 //  - `pose` latency (receive time - stamp; the stamp is the last event's time of the update),
@@ -130,6 +132,7 @@ int main(int argc, char** argv) {
   double focal_px = 800.0, ceiling_m = 2.59, rate = 10e6, duration = 20.0, packet_period = 0.001;
   double amplitude = 1.0, noise_share = 0.05;
   std::string encoding = "evt3", frame = "edvs_optical_frame", report;
+  bool prerender = true;
   std::uint64_t seed = 1;
   app.add_option("--width", width, "sensor columns")->capture_default_str();
   app.add_option("--height", height, "sensor rows")->capture_default_str();
@@ -145,6 +148,9 @@ int main(int argc, char** argv) {
   app.add_option("--encoding", encoding, "evt3 (EventPacket) or array (EventArray)")
       ->capture_default_str();
   app.add_option("--frame", frame, "frame_id of the events")->capture_default_str();
+  app.add_option("--prerender", prerender,
+                 "render every packet before publishing (1) or while publishing (0)")
+      ->capture_default_str();
   app.add_option("--seed", seed, "seed of the ceiling and the events")->capture_default_str();
   app.add_option("--report", report,
                  "diagnostics keys to print per node, '|'-separated (default: rates and counts)");
@@ -199,17 +205,15 @@ int main(int argc, char** argv) {
   // Half the view's diagonal on the ceiling [m]: the box of edge points that may be in view.
   const double reach = 0.5 * std::hypot(width, height) * ceiling_m / focal_px + 0.05;
   std::vector<const EdgePoint*> in_view;
-  std::vector<std::uint8_t> bytes;
-  ebslam::EventVector events;
   const std::size_t packets = static_cast<std::size_t>(duration / packet_period);
   const double events_per_us = rate * 1e-6;
   double carry = 0.0;
-  std::size_t sent_events = 0, sent_messages = 0, late_packets = 0;
   unsigned last_high = ~0u;
-  const ros::WallTime start_wall = ros::WallTime::now();
-  const std::int64_t start_us = ebslam_msgs::toMicroseconds(ros::Time::now());
-  std::uint64_t seq = 0;
-  for (std::size_t k = 0; k < packets && ros::ok(); ++k) {
+  std::size_t sent_events = 0, sent_messages = 0, late_packets = 0;
+  // Renders packet k (sensor time [k, k + 1) * packet_period) into `bytes` (evt3) or `events`
+  // (times in microseconds from the stream's start).
+  const auto render = [&](std::size_t k, std::vector<std::uint8_t>& bytes,
+                          ebslam::EventVector& events) {
     const double t0 = static_cast<double>(k) * packet_period;
     const double t_mid = t0 + 0.5 * packet_period;
     const Pose pose = pathAt(t_mid, amplitude);
@@ -272,7 +276,7 @@ int main(int argc, char** argv) {
           putWord(bytes, 0x2, static_cast<unsigned>(x) | (on ? 0x800u : 0u));  // EVT_ADDR_X
         } else {
           ebslam::Event e;
-          e.t_us = start_us + us;
+          e.t_us = us;
           e.x = static_cast<std::uint16_t>(x);
           e.y = static_cast<std::uint16_t>(y);
           e.polarity = on;
@@ -281,6 +285,38 @@ int main(int argc, char** argv) {
         ++sent_events;
       }
     }
+  };
+  // With --prerender every packet is rendered before the first is published, so that the
+  // source's own cost does not limit the rate on a machine with few cores.
+  std::vector<std::vector<std::uint8_t>> rendered_bytes;
+  std::vector<ebslam::EventVector> rendered_events;
+  std::vector<std::uint8_t> bytes;
+  ebslam::EventVector events;
+  if (prerender) {
+    const ros::WallTime render_start = ros::WallTime::now();
+    rendered_bytes.resize(encoding == "evt3" ? packets : 0);
+    rendered_events.resize(encoding == "evt3" ? 0 : packets);
+    std::size_t stored = 0;
+    for (std::size_t k = 0; k < packets && ros::ok(); ++k) {
+      if (encoding == "evt3") {
+        render(k, rendered_bytes[k], events);
+        stored += rendered_bytes[k].size();
+      } else {
+        render(k, bytes, rendered_events[k]);
+        stored += rendered_events[k].size() * sizeof(ebslam::Event);
+      }
+    }
+    std::printf("source: rendered %zu events in %.1f s (%.0f MiB) before publishing\n", sent_events,
+                (ros::WallTime::now() - render_start).toSec(),
+                static_cast<double>(stored) / (1024.0 * 1024.0));
+    std::fflush(stdout);
+  }
+  const ros::WallTime start_wall = ros::WallTime::now();
+  const std::int64_t start_us = ebslam_msgs::toMicroseconds(ros::Time::now());
+  std::uint64_t seq = 0;
+  for (std::size_t k = 0; k < packets && ros::ok(); ++k) {
+    const double t0 = static_cast<double>(k) * packet_period;
+    if (!prerender) render(k, bytes, events);
     // Published when its last event is due on the wall clock.
     const ros::WallTime due = start_wall + ros::WallDuration(t0 + packet_period);
     const ros::WallTime now = ros::WallTime::now();
@@ -297,13 +333,20 @@ int main(int argc, char** argv) {
       packet.height = static_cast<std::uint32_t>(height);
       packet.seq = seq++;
       packet.encoding = "evt3";
-      packet.events = bytes;
+      if (prerender) {
+        packet.events.swap(rendered_bytes[k]);
+      } else {
+        packet.events = bytes;
+      }
       pub.publish(packet);
     } else {
+      ebslam::EventVector& out = prerender ? rendered_events[k] : events;
+      for (ebslam::Event& e : out) e.t_us += start_us;
       pub.publish(ebslam_msgs::toMsg(
-          events,
+          out,
           ebslam::SensorSize{static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)},
           frame));
+      if (prerender) ebslam::EventVector().swap(out);
     }
     ++sent_messages;
   }

@@ -16,6 +16,7 @@
 #include <ebslam_msgs/EventArray.h>
 
 #include <array>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -41,7 +42,7 @@ class EventRendererNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     image_pub_ = nh.advertise<sensor_msgs::Image>("event_image", 1);
     events_sub_.subscribe(
-        nh, "events", 100, input_type_,
+        nh, "events", static_cast<std::uint32_t>(config_.queue_size), input_type_,
         [this](const ebslam_msgs::EventArray::ConstPtr& msg) { onEvents(msg); },
         ros::TransportHints(), getName());
     image_sub_ = nh.subscribe("image", 1, &EventRendererNodelet::onImage, this);

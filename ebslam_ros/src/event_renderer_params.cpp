@@ -17,6 +17,8 @@ EventRendererConfig loadEventRendererConfig(const ros::NodeHandle& nh) {
   c.accumulation_time_s = param<double>(nh, "accumulation_time", c.accumulation_time_s);
   requirePositive(c.publish_rate_hz, nh, "publish_rate");
   requirePositive(c.accumulation_time_s, nh, "accumulation_time");
+  c.queue_size = param<int>(nh, "queue_size", c.queue_size);
+  if (c.queue_size < 1) fail(nh, "queue_size", "must be at least 1");
   for (const auto& [name, colour] :
        {std::pair<const char*, std::array<int, 3>*>{"on_colour", &c.on_rgb},
         {"off_colour", &c.off_rgb}}) {

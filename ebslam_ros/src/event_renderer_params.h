@@ -13,6 +13,9 @@ struct EventRendererConfig {
   double accumulation_time_s = 0.033;    ///< ~accumulation_time: events of this much event time [s]
   std::array<int, 3> on_rgb{0, 0, 255};  ///< ~on_colour [r, g, b] 0..255 (rpg_dvs_ros: blue)
   std::array<int, 3> off_rgb{255, 0, 0};  ///< ~off_colour [r, g, b] 0..255 (red)
+  /// ~queue_size: event messages queued while a render holds the node (1 ms packets of a
+  /// megapixel camera: 1000 is one second)
+  int queue_size = 1000;
 };
 EventRendererConfig loadEventRendererConfig(const ros::NodeHandle& private_nh);
 
