@@ -80,6 +80,8 @@ ExplorationNodeConfig loadExplorationNodeConfig(const ros::NodeHandle& nh) {
   integer("repeat_bumps", v.repeat_bumps);
   real("repeat_bump_radius", v.repeat_bump_radius_m);
   real("repeat_bump_window", v.repeat_bump_window_s);
+  real("escape_turn_rate", v.escape_turn_rate_rps);
+  real("escape_forward", v.escape_forward_m);
   integer("max_bumps_per_goal", v.max_bumps_per_goal);
   real("progress", v.progress_m);
   real("progress_timeout", v.progress_timeout_s);

@@ -10,6 +10,7 @@
 #     scripts/results/coverage_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
+source "$repo/scripts/results/explore_runs.sh"
 build="${1:-/tmp/build_ebslam_coverage}"
 runs="${2:-/tmp/coverage_runs}"
 read -r -a seeds <<< "${SEEDS:-1 2 3 4 5}"
@@ -38,14 +39,7 @@ for plan in "${plans[@]}"; do
   done
 done
 wait
-{
-  head -1 "$runs/baseline/summary.csv"
-  for d in "${dirs[@]}"; do
-    tail -n +2 "$runs/$d/summary.csv"
-    cp "$runs/$d"/*_* "$runs"/
-  done
-} > "$runs/summary.csv.tmp"
-mv "$runs/summary.csv.tmp" "$runs/summary.csv"
+merge_runs "$runs" "${dirs[@]}"
 /usr/bin/python3 "$repo/scripts/results/coverage_report.py" "$runs" \
   --plans "$repo/src/ebslam/floor_plans" --held-out "$repo/src/ebslam/floor_plans/held_out" \
   --out "$repo/docs/results" --command "scripts/results/coverage_experiment.sh"

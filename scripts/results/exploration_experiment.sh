@@ -10,6 +10,7 @@
 #     scripts/results/exploration_experiment.sh [BUILD_DIR] [RUNS_DIR]
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
+source "$repo/scripts/results/explore_runs.sh"
 build="${1:-/tmp/build_ebslam_exploration}"
 runs="${2:-/tmp/exploration_runs}"
 read -r -a seeds <<< "${SEEDS:-1 2 3 4 5}"
@@ -33,15 +34,7 @@ for name in "${layouts[@]}"; do
   dirs+=("gain_$name")
 done
 wait
-# One folder with one summary.
-{
-  head -1 "$runs/baseline/summary.csv"
-  for d in "${dirs[@]}"; do
-    tail -n +2 "$runs/$d/summary.csv"
-    cp "$runs/$d"/*_* "$runs"/
-  done
-} > "$runs/summary.csv.tmp"
-mv "$runs/summary.csv.tmp" "$runs/summary.csv"
+merge_runs "$runs" "${dirs[@]}"
 "$build/ebslam_exploration_bench" --benchmark_min_time=0.5 \
   --benchmark_out="$runs/bench.json" --benchmark_out_format=json
 /usr/bin/python3 "$repo/scripts/results/exploration_report.py" "$runs" --plans "$repo/src/ebslam/floor_plans" \

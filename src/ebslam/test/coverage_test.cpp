@@ -23,6 +23,9 @@ TEST(CoverageConfig, RejectsInvalidParameters) {
   config.uncertain_speed_factor = 1.5;
   EXPECT_THROW(config.validate(), std::invalid_argument);
   config = CoverageConfig{};
+  config.escape_turn_rate_rps = 0.0;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config = CoverageConfig{};
   config.cell_m = std::nan("");
   EXPECT_THROW(CoverageMap(config, {0.0, 0.0}), std::invalid_argument);
 }
@@ -128,6 +131,46 @@ TEST(CoverageExplorer, StopsWithoutAPoseAndBacksOutOfABump) {
   EXPECT_EQ(explorer.state(), CoverageState::kBackingOut);
   EXPECT_LT(command.v_mps, 0.0);
   EXPECT_EQ(explorer.map().contacts().size(), 1u);
+}
+
+// In a corner a contact ahead and one behind alternate: backing out alone never ends. After
+// repeat_bumps contacts at one place the explorer turns in place until the contact is behind,
+// ignoring contacts while it turns, then drives away from it.
+TEST(CoverageExplorer, TurnsAwayFromAPlaceWhereBumpsRepeat) {
+  const CoverageConfig config;
+  CoverageExplorer explorer(config, Pose2{0.0, 0.0, 0.0});
+  const Pose2 pose{0.0, 0.0, 0.0};
+  explorer.update(0.0, pose, {});
+  BumpReading left;
+  left.segments = 1u << 2;  // segment 2: 90 degrees, the robot's left
+  left.direction_rad = 0.5 * kPi;
+  VelocityCommand command;
+  double t = 0.0;
+  for (int i = 0; i < config.repeat_bumps; ++i) {
+    t += 0.05;
+    command = explorer.update(t, pose, left);
+  }
+  EXPECT_EQ(explorer.escapes(), 1u);
+  EXPECT_EQ(command.v_mps, 0.0);
+  EXPECT_DOUBLE_EQ(command.omega_rps, -config.escape_turn_rate_rps);  // right: contact behind
+  const double turn_s = 0.5 * kPi / config.escape_turn_rate_rps;
+  for (; t + 0.05 < 0.05 * config.repeat_bumps + turn_s; t += 0.05) {
+    command = explorer.update(t + 0.05, pose, left);  // still pressed: ignored while turning
+    EXPECT_EQ(command.v_mps, 0.0);
+    EXPECT_DOUBLE_EQ(command.omega_rps, -config.escape_turn_rate_rps);
+  }
+  t += 0.1;
+  BumpReading behind;  // the same wall, now behind: does not stop the escape
+  behind.segments = 1u << 4;
+  behind.direction_rad = kPi;
+  command = explorer.update(t, pose, behind);
+  EXPECT_DOUBLE_EQ(command.v_mps, config.backout_speed_mps);
+  EXPECT_EQ(command.omega_rps, 0.0);
+  EXPECT_EQ(explorer.escapes(), 1u);
+  // The forward leg ends after escape_forward_m; then the explorer plans again.
+  t += config.escape_forward_m / config.backout_speed_mps + 0.1;
+  command = explorer.update(t, pose, {});
+  EXPECT_NE(explorer.state(), CoverageState::kBackingOut);
 }
 
 // The planner on its own in a furnished room, with the true pose and no events (ten times

@@ -53,6 +53,9 @@ void CoverageConfig::validate() const {
   require(repeat_bumps >= 2 && positive(repeat_bump_radius_m) && positive(repeat_bump_window_s),
           "CoverageConfig: repeat_bumps must be >= 2, repeat_bump_radius_m and "
           "repeat_bump_window_s positive");
+  require(
+      positive(escape_turn_rate_rps) && std::isfinite(escape_forward_m) && escape_forward_m >= 0.0,
+      "CoverageConfig: escape_turn_rate_rps must be positive and escape_forward_m >= 0");
   require(std::isfinite(side_bump_skip_m) && side_bump_skip_m >= 0.0,
           "CoverageConfig: side_bump_skip_m must be >= 0");
   require(positive(progress_m) && positive(progress_timeout_s),
@@ -558,6 +561,13 @@ VelocityCommand CoverageExplorer::update(double now_s, const std::optional<Pose2
     command.omega_rps *= factor;
     return command;
   };
+  if (now_s < escape_turn_until_s_) return scaled({0.0, escape_omega_});
+  if (now_s < escape_forward_until_s_) {
+    if (!bump.contact() || std::cos(bump.direction_rad) < 0.5) {
+      return scaled({config_.backout_speed_mps, 0.0});
+    }
+    escape_forward_until_s_ = -1.0;  // a contact ahead: handled as any bump
+  }
   if (bump.contact()) {
     ++bumps_;
     map_.addContact(*pose_, bump.direction_rad);
@@ -581,6 +591,19 @@ VelocityCommand CoverageExplorer::update(double now_s, const std::optional<Pose2
       if (!path_.empty() && !done_) map_.abandon(path_.back(), 0.5 * config_.lane_spacing_m);
       ++goals_abandoned_;
       recent_bumps_.clear();
+      // Turn until the contact is behind (by the shorter way), then drive away from it.
+      const double turn = std::remainder(bump.direction_rad + M_PI, 2.0 * M_PI);
+      escape_omega_ = turn >= 0.0 ? config_.escape_turn_rate_rps : -config_.escape_turn_rate_rps;
+      escape_turn_until_s_ = now_s + std::abs(turn) / config_.escape_turn_rate_rps;
+      escape_forward_until_s_ =
+          escape_turn_until_s_ + config_.escape_forward_m / config_.backout_speed_mps;
+      ++escapes_;
+      message_ = "bumps repeat at one place: turning away from the contact";
+      if (state_ == CoverageState::kSweeping) finishLane(position);
+      state_ = CoverageState::kBackingOut;
+      backout_until_s_ = now_s;
+      need_decision_ = true;
+      return scaled({0.0, escape_omega_});
     }
     if (state_ == CoverageState::kSweeping) {
       finishLane(position);

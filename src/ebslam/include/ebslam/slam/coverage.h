@@ -65,6 +65,13 @@ struct CoverageConfig {
   int repeat_bumps = 3;
   double repeat_bump_radius_m = 0.1;
   double repeat_bump_window_s = 20.0;
+  /// Escape after repeated bumps (in a corner backing out and driving on can both be blocked,
+  /// and each contact would start another back-out): turn in place at escape_turn_rate_rps
+  /// [rad/s] until the contact is behind the robot, ignoring contacts while turning (a disc can
+  /// always turn), then drive escape_forward_m [m] at backout_speed_mps, stopped only by a
+  /// contact ahead.
+  double escape_turn_rate_rps = 0.5;
+  double escape_forward_m = 0.2;
   /// A goal is given up after this many bumps on the way, or when the path to it has not
   /// shortened by progress_m within progress_timeout_s [s].
   int max_bumps_per_goal = 4;
@@ -199,6 +206,8 @@ class CoverageExplorer {
   const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& lanes() const { return lanes_; }
   std::size_t bumps() const { return bumps_; }
   std::size_t goalsAbandoned() const { return goals_abandoned_; }
+  /// Escape manoeuvres after repeated bumps (CoverageConfig::escape_turn_rate_rps).
+  std::size_t escapes() const { return escapes_; }
 
  private:
   void decide(double now_s, const Eigen::Vector2d& position);
@@ -241,6 +250,12 @@ class CoverageExplorer {
   int sweep_after_transit_direction_ = 0;
   double backout_until_s_ = 0.0;
   double backout_speed_ = 0.0;
+  // Escape manoeuvre: turning until escape_turn_until_s_, then forward until
+  // escape_forward_until_s_.
+  double escape_turn_until_s_ = -1.0;
+  double escape_forward_until_s_ = -1.0;
+  double escape_omega_ = 0.0;
+  std::size_t escapes_ = 0;
   std::optional<Eigen::Vector2d> last_visit_;
   std::vector<std::pair<double, Eigen::Vector2d>> recent_bumps_;  // (time, robot position)
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lanes_;
