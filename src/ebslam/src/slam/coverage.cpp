@@ -561,10 +561,12 @@ VelocityCommand CoverageExplorer::update(double now_s, const std::optional<Pose2
     command.omega_rps *= factor;
     return command;
   };
-  if (now_s < escape_turn_until_s_) return scaled({0.0, escape_omega_});
+  // The escape is timed for its own rate and speed: not scaled while uncertain (scaling would
+  // turn half the angle and drive half the distance).
+  if (now_s < escape_turn_until_s_) return {0.0, escape_omega_};
   if (now_s < escape_forward_until_s_) {
     if (!bump.contact() || std::cos(bump.direction_rad) < 0.5) {
-      return scaled({config_.backout_speed_mps, 0.0});
+      return {config_.backout_speed_mps, 0.0};
     }
     escape_forward_until_s_ = -1.0;  // a contact ahead: handled as any bump
   }
@@ -603,7 +605,7 @@ VelocityCommand CoverageExplorer::update(double now_s, const std::optional<Pose2
       state_ = CoverageState::kBackingOut;
       backout_until_s_ = now_s;
       need_decision_ = true;
-      return scaled({0.0, escape_omega_});
+      return {0.0, escape_omega_};
     }
     if (state_ == CoverageState::kSweeping) {
       finishLane(position);
